@@ -1,0 +1,1 @@
+"""visland.datasets stage (see the module list in its README section)."""

@@ -1,0 +1,1 @@
+"""visland.detection stage (see the module list in its README section)."""

@@ -1,0 +1,1 @@
+"""visland.estimation stage (see the module list in its README section)."""

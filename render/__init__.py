@@ -1,0 +1,1 @@
+"""visland.render stage (see the module list in its README section)."""

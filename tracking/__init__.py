@@ -1,0 +1,1 @@
+"""visland.tracking stage (see the module list in its README section)."""

@@ -1,0 +1,277 @@
+"""Pinhole camera model and the image conventions every visland stage uses.
+
+Conventions (stated once here; SPEC.md "Conventions"):
+
+- Camera frame C (OpenCV): x right, y down, z along the optical axis.
+- Pixels ``(u, v)``: u to the right, v down; ``(0, 0)`` is the *centre* of the top-left
+  pixel (OpenCV). The image covers ``-0.5 <= u <= width - 0.5``.
+- Intrinsics ``fx, fy, cx, cy``; default 2048x2048, fx = fy = 2472 px (45 deg field of
+  view), cx = cy = 1023.5 (scaled with the image size for other sizes).
+- Normalised coordinates ``x = (u - cx) / fx``, ``y = (v - cy) / fy`` (thesis focal f = 1).
+- Lines ``(rho, theta)``: ``x cos(theta) + y sin(theta) = rho`` in normalised coordinates
+  (thesis eq. 3.34). Chart: ``theta`` in ``[-pi/2, pi/2)``, ``rho`` signed. A line whose
+  normal would leave the chart is written ``(-rho, theta -+ pi)``; runway edges and centre
+  line are near-vertical in the image, so their ``theta`` stays near 0, far from the wrap.
+  Pixel-space Hough lines ``u cos(t) + v sin(t) = r`` are converted at the boundary with
+  :meth:`CameraModel.line_from_pixel_hough` / :meth:`CameraModel.line_to_pixel_hough`.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from visland.frames import R_body_from_camera
+
+__all__ = [
+    "CameraModel",
+    "DEFAULT_IMAGE_SIZE",
+    "DEFAULT_FOCAL_PX",
+    "DEFAULT_MOUNT_RPY_DEG",
+    "wrap_line_chart",
+    "line_through_points",
+    "intersect_lines",
+]
+
+DEFAULT_IMAGE_SIZE = 2048
+DEFAULT_FOCAL_PX = 2472.0
+# Optical axis along body x, pitched down 3 deg: keeps the runway, from 6 km out in level
+# flight to 50 ft on the glide path, inside the 45 deg field of view.
+DEFAULT_MOUNT_RPY_DEG = (0.0, -3.0, 0.0)
+
+
+@dataclass(frozen=True)
+class CameraModel:
+    """Pinhole camera: image size, intrinsics and mounting on the body.
+
+    Parameters
+    ----------
+    width, height : int
+        Image size in pixels.
+    fx, fy : float
+        Focal lengths in pixels.
+    cx, cy : float
+        Principal point in pixels (pixel-centre convention, see module docstring).
+    mount_rpy_rad : tuple of 3 float
+        Camera attitude relative to the body, ``(roll, pitch, yaw)`` applied ZYX;
+        ``(0, 0, 0)`` looks along body x, negative pitch looks down.
+    """
+
+    width: int = DEFAULT_IMAGE_SIZE
+    height: int = DEFAULT_IMAGE_SIZE
+    fx: float = DEFAULT_FOCAL_PX
+    fy: float = DEFAULT_FOCAL_PX
+    cx: float = (DEFAULT_IMAGE_SIZE - 1) / 2.0
+    cy: float = (DEFAULT_IMAGE_SIZE - 1) / 2.0
+    mount_rpy_rad: tuple = field(
+        default=tuple(math.radians(a) for a in DEFAULT_MOUNT_RPY_DEG))
+
+    def __post_init__(self):
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 16:
+                raise ValueError(f"camera {name} must be an integer of at least 16 px, got {value!r}")
+        for name in ("fx", "fy"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float, np.floating)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"camera {name} must be a positive finite number of pixels, got {value!r}")
+        if not (math.isfinite(self.cx) and -0.5 <= self.cx <= self.width - 0.5):
+            raise ValueError(f"camera cx must lie inside the image width, got {self.cx!r}")
+        if not (math.isfinite(self.cy) and -0.5 <= self.cy <= self.height - 0.5):
+            raise ValueError(f"camera cy must lie inside the image height, got {self.cy!r}")
+        mount = tuple(float(a) for a in self.mount_rpy_rad)
+        if len(mount) != 3 or not all(math.isfinite(a) and abs(a) <= math.pi for a in mount):
+            raise ValueError(f"camera mount_rpy_rad must be 3 finite angles within +-pi, got {self.mount_rpy_rad!r}")
+        object.__setattr__(self, "mount_rpy_rad", mount)
+        object.__setattr__(self, "width", int(self.width))
+        object.__setattr__(self, "height", int(self.height))
+        object.__setattr__(self, "fx", float(self.fx))
+        object.__setattr__(self, "fy", float(self.fy))
+        object.__setattr__(self, "cx", float(self.cx))
+        object.__setattr__(self, "cy", float(self.cy))
+
+    # ----------------------------------------------------------------- construction
+    @classmethod
+    def default(cls, size: int = DEFAULT_IMAGE_SIZE, mount_rpy_deg=DEFAULT_MOUNT_RPY_DEG) -> "CameraModel":
+        """The SPEC camera (45 deg field of view) at a square image ``size``."""
+        if not isinstance(size, (int, np.integer)) or size < 16:
+            raise ValueError(f"size must be an integer of at least 16 px, got {size!r}")
+        focal = DEFAULT_FOCAL_PX * size / DEFAULT_IMAGE_SIZE
+        centre = (size - 1) / 2.0
+        return cls(int(size), int(size), focal, focal, centre, centre,
+                   tuple(math.radians(a) for a in mount_rpy_deg))
+
+    def with_mount(self, mount_rpy_rad) -> "CameraModel":
+        """Same intrinsics, another mounting (e.g. to apply a calibration error)."""
+        return CameraModel(self.width, self.height, self.fx, self.fy, self.cx, self.cy,
+                           tuple(mount_rpy_rad))
+
+    @property
+    def mount_rpy_deg(self) -> tuple:
+        return tuple(math.degrees(a) for a in self.mount_rpy_rad)
+
+    @property
+    def K(self) -> np.ndarray:
+        """3x3 intrinsic matrix."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    @property
+    def R_body_from_camera(self) -> np.ndarray:
+        return R_body_from_camera(self.mount_rpy_rad)
+
+    # ----------------------------------------------------------------- JSON
+    def to_json_dict(self) -> dict:
+        """The ``camera.json`` content of SPEC.md (angles in degrees)."""
+        return {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy,
+                "cx": self.cx, "cy": self.cy, "mount_rpy_deg": list(self.mount_rpy_deg)}
+
+    @classmethod
+    def from_json_dict(cls, data: dict, source: str = "camera.json") -> "CameraModel":
+        """Build from a ``camera.json`` dictionary; one clear error per missing/bad field."""
+        if not isinstance(data, dict):
+            raise ValueError(f"{source}: expected a JSON object, got {type(data).__name__}")
+        required = ("width", "height", "fx", "fy", "cx", "cy", "mount_rpy_deg")
+        for key in required:
+            if key not in data:
+                raise ValueError(f"{source}: missing field '{key}' (needed: {', '.join(required)})")
+        for key in ("width", "height"):
+            value = data[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value:
+                raise ValueError(f"{source}: field '{key}' must be an integer, got {value!r}")
+        for key in ("fx", "fy", "cx", "cy"):
+            value = data[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"{source}: field '{key}' must be a finite number, got {value!r}")
+        mount = data["mount_rpy_deg"]
+        if (not isinstance(mount, (list, tuple)) or len(mount) != 3
+                or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a)
+                           for a in mount)):
+            raise ValueError(f"{source}: field 'mount_rpy_deg' must be a list of 3 numbers [roll, pitch, yaw], got {mount!r}")
+        try:
+            return cls(int(data["width"]), int(data["height"]), float(data["fx"]), float(data["fy"]),
+                       float(data["cx"]), float(data["cy"]), tuple(math.radians(a) for a in mount))
+        except ValueError as error:
+            raise ValueError(f"{source}: {error}") from None
+
+    def save(self, path) -> None:
+        Path(path).write_text(json.dumps(self.to_json_dict(), indent=2) + "\n")
+
+    @classmethod
+    def load(cls, path) -> "CameraModel":
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise ValueError(f"{path}: camera file not found") from None
+        except json.JSONDecodeError as error:
+            raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
+        return cls.from_json_dict(data, source=str(path))
+
+    # ----------------------------------------------------------------- points
+    def normalized_to_pixels(self, xy) -> np.ndarray:
+        """Normalised coordinates ``(..., 2)`` to pixels ``(..., 2)``."""
+        xy = np.asarray(xy, dtype=float)
+        return np.stack([self.fx * xy[..., 0] + self.cx, self.fy * xy[..., 1] + self.cy], axis=-1)
+
+    def pixels_to_normalized(self, uv) -> np.ndarray:
+        """Pixels ``(..., 2)`` to normalised coordinates ``(..., 2)``."""
+        uv = np.asarray(uv, dtype=float)
+        return np.stack([(uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy], axis=-1)
+
+    def project(self, p_camera_m) -> tuple[np.ndarray, np.ndarray]:
+        """Project camera-frame points ``(..., 3)`` to pixels.
+
+        Returns
+        -------
+        uv : ndarray, shape (..., 2)
+            Pixel coordinates (NaN for points at or behind the camera centre).
+        in_front : ndarray of bool, shape (...)
+            True where the point lies in front of the camera (z > 0).
+        """
+        p = np.asarray(p_camera_m, dtype=float)
+        z = p[..., 2]
+        in_front = z > 1e-9
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xy = np.stack([p[..., 0] / z, p[..., 1] / z], axis=-1)
+        xy = np.where(in_front[..., None], xy, np.nan)
+        return self.normalized_to_pixels(xy), in_front
+
+    def in_image(self, uv, margin_px: float = 0.0) -> np.ndarray:
+        """True where pixel coordinates lie inside the image (``margin_px`` inside the border)."""
+        uv = np.asarray(uv, dtype=float)
+        u, v = uv[..., 0], uv[..., 1]
+        with np.errstate(invalid="ignore"):
+            return ((u >= -0.5 + margin_px) & (u <= self.width - 0.5 - margin_px)
+                    & (v >= -0.5 + margin_px) & (v <= self.height - 0.5 - margin_px))
+
+    # ----------------------------------------------------------------- lines
+    def line_from_pixel_hough(self, rho_px, theta_px_rad) -> tuple[np.ndarray, np.ndarray]:
+        """Pixel-space line ``u cos(t) + v sin(t) = r`` (OpenCV HoughLines) to SPEC ``(rho, theta)``.
+
+        Substituting ``u = fx x + cx``, ``v = fy y + cy`` gives
+        ``x fx cos(t) + y fy sin(t) = r - cx cos(t) - cy sin(t)``, normalised to a unit normal.
+        """
+        t = np.asarray(theta_px_rad, dtype=float)
+        r = np.asarray(rho_px, dtype=float)
+        a = self.fx * np.cos(t)
+        b = self.fy * np.sin(t)
+        norm = np.hypot(a, b)
+        rho = (r - self.cx * np.cos(t) - self.cy * np.sin(t)) / norm
+        theta = np.arctan2(b, a)
+        return wrap_line_chart(rho, theta)
+
+    def line_to_pixel_hough(self, rho, theta_rad) -> tuple[np.ndarray, np.ndarray]:
+        """SPEC ``(rho, theta)`` to a pixel-space line ``u cos(t) + v sin(t) = r`` with t in [-pi/2, pi/2)."""
+        theta = np.asarray(theta_rad, dtype=float)
+        rho = np.asarray(rho, dtype=float)
+        # x cos + y sin = rho, x = (u - cx)/fx, y = (v - cy)/fy
+        a = np.cos(theta) / self.fx
+        b = np.sin(theta) / self.fy
+        c = rho + self.cx * a + self.cy * b
+        norm = np.hypot(a, b)
+        return wrap_line_chart(c / norm, np.arctan2(b, a))
+
+    def line_distance_px(self, rho, theta_rad, uv) -> np.ndarray:
+        """Signed distance in pixels from pixel points ``uv (..., 2)`` to a SPEC line."""
+        r_px, t_px = self.line_to_pixel_hough(rho, theta_rad)
+        uv = np.asarray(uv, dtype=float)
+        return uv[..., 0] * np.cos(t_px) + uv[..., 1] * np.sin(t_px) - r_px
+
+
+def wrap_line_chart(rho, theta_rad) -> tuple[np.ndarray, np.ndarray]:
+    """Map any ``(rho, theta)`` to the SPEC chart ``theta in [-pi/2, pi/2)``.
+
+    A shift of theta by pi flips the sign of rho: ``(rho, theta) ~ (-rho, theta + pi)``,
+    so ``theta - k pi`` goes with ``(-1)^k rho``.
+    """
+    theta = np.asarray(theta_rad, dtype=float)
+    rho = np.asarray(rho, dtype=float)
+    k = np.floor((theta + np.pi / 2) / np.pi)
+    sign = np.where(np.mod(k, 2) == 0, 1.0, -1.0)
+    return sign * rho, theta - k * np.pi
+
+
+def line_through_points(xy_a, xy_b) -> tuple[np.ndarray, np.ndarray]:
+    """SPEC ``(rho, theta)`` of the line through two normalised points ``(..., 2)``."""
+    a = np.asarray(xy_a, dtype=float)
+    b = np.asarray(xy_b, dtype=float)
+    d = b - a
+    # normal (cos t, sin t) is perpendicular to the direction d
+    theta = np.arctan2(d[..., 0], -d[..., 1])
+    rho = a[..., 0] * np.cos(theta) + a[..., 1] * np.sin(theta)
+    return wrap_line_chart(rho, theta)
+
+
+def intersect_lines(rho_a, theta_a, rho_b, theta_b) -> np.ndarray:
+    """Intersection ``(..., 2)`` of two SPEC lines (NaN where parallel)."""
+    ca, sa = np.cos(theta_a), np.sin(theta_a)
+    cb, sb = np.cos(theta_b), np.sin(theta_b)
+    det = ca * sb - sa * cb
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = (np.asarray(rho_a) * sb - np.asarray(rho_b) * sa) / det
+        y = (ca * np.asarray(rho_b) - cb * np.asarray(rho_a)) / det
+    bad = np.abs(det) < 1e-12
+    return np.stack([np.where(bad, np.nan, x), np.where(bad, np.nan, y)], axis=-1)

@@ -1,0 +1,125 @@
+"""The ``visland`` command line: one entry point, a subcommand per job.
+
+Core commands (``scenarios``, ``simulate``) live here. Each stage registers its own commands
+from a light module ``visland.<stage>.cli`` exposing ``register(subparsers)`` and, for
+benchmarks, ``register_bench(bench_subparsers)``; those modules import their heavy
+dependencies (OpenGL, OpenCV, Dask) only inside the command functions, so ``visland simulate``
+starts fast. A command function takes the parsed arguments and returns an exit code; a
+``ValueError`` becomes one clear line on stderr and exit status 2.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from visland import __version__
+
+#: Stage CLI modules, in the order their commands are listed.
+STAGE_CLI_MODULES = (
+    "visland.render.cli",
+    "visland.detection.cli",
+    "visland.tracking.cli",
+    "visland.estimation.cli",
+    "visland.datasets.cli",
+)
+
+
+def _cmd_scenarios(args) -> int:
+    from visland.scenarios import BUILTIN_SCENARIOS
+    print(f"{'name':15s} {'dX m':>7s} {'dY m':>6s} {'dGS m':>6s} {'dpsi':>5s} {'gamma':>5s}  description")
+    for scenario in BUILTIN_SCENARIOS.values():
+        print(f"{scenario.name:15s} {scenario.dx_m:7.0f} {scenario.dy_m:6.0f} {scenario.dgs_m:6.0f} "
+              f"{scenario.dpsi_deg:5.0f} {scenario.gamma_deg:5.0f}  {scenario.description}")
+    print("\nAlso: any TOML scenario file (see README, 'Scenario files').")
+    return 0
+
+
+def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
+    """Arguments shared by ``simulate`` and the commands that simulate before rendering."""
+    parser.add_argument("--scenario", required=True, metavar="NAME|FILE",
+                        help="built-in scenario name (see 'visland scenarios') or a TOML scenario file")
+    parser.add_argument("--out", required=True, metavar="DIR", help="output folder (must not exist unless --force)")
+    parser.add_argument("--fps", type=float, default=25.0, help="camera frame rate in Hz (default 25)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of every random generator (default 0)")
+    parser.add_argument("--calibration-error", type=float, default=0.0, metavar="DEG",
+                        help="camera mounting error added to roll, pitch and yaw (thesis 5.2.2.2: 0.3, 0.5, 1)")
+    parser.add_argument("--velocity-bias", type=float, default=0.0, metavar="FRACTION",
+                        help="constant relative IMU velocity bias, e.g. 0.05 for 5 %% (thesis 5.2.2.3)")
+    parser.add_argument("--imu-noise", type=float, default=0.0, metavar="SCALE",
+                        help="IMU white noise: SCALE x (0.05 deg attitude, 0.1 deg/s rates, 0.1 m/s velocity)")
+    parser.add_argument("--force", action="store_true", help="replace an existing output folder")
+
+
+def simulation_options_from_args(args, camera=None):
+    """Build :class:`visland.simulate.SimulationOptions` from parsed arguments."""
+    from visland.camera import CameraModel
+    from visland.sensors import ImuParams
+    from visland.simulate import SimulationOptions
+    if args.imu_noise < 0:
+        raise ValueError(f"--imu-noise must be non-negative, got {args.imu_noise}")
+    imu = ImuParams(velocity_bias_fraction=args.velocity_bias, velocity_noise_mps=0.1 * args.imu_noise,
+                    attitude_noise_deg=0.05 * args.imu_noise, rate_noise_dps=0.1 * args.imu_noise,
+                    seed=args.seed)
+    return SimulationOptions(fps=args.fps, camera=camera or CameraModel.default(),
+                             pixel_noise_px=getattr(args, "pixel_noise", 0.0),
+                             calibration_error_deg=args.calibration_error, imu=imu, seed=args.seed)
+
+
+def _cmd_simulate(args) -> int:
+    from visland.scenarios import resolve_scenario
+    from visland.simulate import run_simulation, summary_lines, write_simulation
+    scenario = resolve_scenario(args.scenario)
+    options = simulation_options_from_args(args)
+    result = run_simulation(scenario, options)
+    write_simulation(result, args.out, force=args.force)
+    for line in summary_lines(result):
+        print(line)
+    print(f"wrote {args.out}/: telemetry.csv truth.csv labels.csv camera.json runway.json manifest.json")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="visland",
+        description="Vision-based landing on unknown runways: simulate, render, detect, track, estimate.")
+    parser.add_argument("--version", action="version", version=f"visland {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+
+    p = sub.add_parser("scenarios", help="list the built-in scenarios")
+    p.set_defaults(func=_cmd_scenarios)
+
+    p = sub.add_parser("simulate", help="fly a scenario; write telemetry, truth and ideal labels (no images)")
+    add_simulation_arguments(p)
+    p.add_argument("--pixel-noise", type=float, default=0.0, metavar="PX",
+                   help="white Gaussian noise on the corner pixels (thesis 5.2.2.1: 1 or 5 px)")
+    p.set_defaults(func=_cmd_simulate)
+
+    bench = sub.add_parser("bench", help="time a stage: render, detect, track or estimate")
+    bench_sub = bench.add_subparsers(dest="target", metavar="TARGET")
+    bench_sub.required = True
+
+    for module_name in STAGE_CLI_MODULES:
+        module = importlib.import_module(module_name)
+        module.register(sub)
+        if hasattr(module, "register_bench"):
+            module.register_bench(bench_sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except ValueError as error:
+        print(f"visland {args.command}: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"visland {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,295 @@
+"""File contracts of SPEC.md: the CSV and JSON files users exchange, read and written here.
+
+Every reader validates what it reads and fails with one ``ValueError`` sentence naming the
+file, the line and the column (missing column, text where a number belongs, NaN, time that
+does not increase). Every writer writes atomically (a temporary file renamed into place), so
+a reader never sees half a file.
+
+Schemas (columns in this order; "more columns may follow" where SPEC says so):
+
+- ``telemetry.csv``: :data:`TELEMETRY_COLUMNS`, inertial data at >= the frame rate.
+- ``truth.csv``: :data:`TRUTH_COLUMNS` then :data:`TRUTH_EXTRA_COLUMNS`, one row per frame.
+- ``labels.csv``: :data:`LABEL_COLUMNS` then :data:`LABEL_EXTRA_COLUMNS`, one row per frame.
+- ``measurements.csv``: :data:`MEASUREMENT_COLUMNS` (labels schema + source, found, reason,
+  confidence); empty cells where a feature was not measured.
+- ``estimates.csv``: :data:`ESTIMATE_COLUMNS`, one row per observer per frame.
+- ``frames.csv``: ``frame,t_s``.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import shutil
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from visland.runway import CORNER_NAMES
+from visland.sensors import TELEMETRY_COLUMNS
+
+__all__ = [
+    "TELEMETRY_COLUMNS", "TRUTH_COLUMNS", "TRUTH_EXTRA_COLUMNS", "LABEL_COLUMNS", "LABEL_EXTRA_COLUMNS",
+    "MEASUREMENT_COLUMNS", "ESTIMATE_COLUMNS", "FRAMES_COLUMNS", "Table", "read_csv", "write_csv",
+    "read_telemetry", "read_truth", "read_labels", "read_measurements", "read_frames_csv", "read_estimates",
+    "atomic_write_text", "atomic_write_bytes", "staged_output_dir", "check_time_column",
+]
+
+TRUTH_COLUMNS = ("t_s", "dx_m", "dy_m", "dh_m", "roll_deg", "pitch_deg", "dpsi_deg")
+TRUTH_EXTRA_COLUMNS = ("frame", "dgs_m", "heading_deg", "vx_runway_mps", "vy_runway_mps", "vz_runway_mps")
+
+LABEL_COLUMNS = (
+    ("frame", "t_s")
+    + tuple(f"{c}_{a}_px" for c in CORNER_NAMES for a in ("u", "v"))
+    + ("left_rho", "left_theta_rad", "right_rho", "right_theta_rad", "center_rho", "center_theta_rad",
+       "dF_px", "dpsi_deg")
+    + tuple(f"{c}_visible" for c in CORNER_NAMES)
+)
+#: Virtual-frame threshold corners (thesis 3.23) and observability indices (thesis 3.30, 3.40).
+LABEL_EXTRA_COLUMNS = ("yv1_near_left", "yv2_near_left", "yv1_near_right", "yv2_near_right",
+                       "obs_points", "obs_lines")
+MEASUREMENT_COLUMNS = LABEL_COLUMNS + ("source", "found", "reason", "confidence")
+ESTIMATE_COLUMNS = ("observer", "t_s", "dx_m", "dy_m", "dh_m", "width_m", "dpsi_deg", "observability")
+FRAMES_COLUMNS = ("frame", "t_s")
+
+#: Label/measurement columns that may be empty (not visible, not measured).
+_FEATURE_COLUMNS = frozenset(LABEL_COLUMNS[2:] + LABEL_EXTRA_COLUMNS)
+
+
+def _read_umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+_UMASK = _read_umask()
+
+
+class Table(dict):
+    """Columns of a CSV file as numpy arrays (text columns as arrays of str), with its path."""
+
+    def __init__(self, columns: dict, path: Path, column_order: list):
+        super().__init__(columns)
+        self.path = path
+        self.column_order = list(column_order)
+
+    @property
+    def n_rows(self) -> int:
+        return len(next(iter(self.values()))) if self else 0
+
+
+# --------------------------------------------------------------------------- writing
+def _format_cell(value) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, (str, np.str_)):
+        return str(value)
+    if isinstance(value, (bool, np.bool_)):
+        return "1" if value else "0"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    value = float(value)
+    if not math.isfinite(value):
+        return ""
+    return format(value, ".12g")
+
+
+def write_csv(path, columns: dict, order=None) -> None:
+    """Write columns (equal-length sequences) as CSV, atomically; NaN and None become empty cells."""
+    order = list(order) if order is not None else list(columns)
+    missing = [c for c in order if c not in columns]
+    if missing:
+        raise ValueError(f"{path}: no data for column '{missing[0]}'")
+    lengths = {len(columns[c]) for c in order}
+    if len(lengths) > 1:
+        raise ValueError(f"{path}: columns have different lengths {sorted(lengths)}")
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(order)
+    cols = [columns[c] for c in order]
+    n = lengths.pop() if lengths else 0
+    for i in range(n):
+        writer.writerow([_format_cell(col[i]) for col in cols])
+    atomic_write_text(path, buffer.getvalue())
+
+
+def atomic_write_bytes(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.chmod(tmp, 0o666 & ~_UMASK)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+def atomic_write_text(path, text: str) -> None:
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+@contextmanager
+def staged_output_dir(out_dir, force: bool = False):
+    """Build an output folder in a hidden sibling and move it into place only on success.
+
+    An existing ``out_dir`` is refused unless ``force``; on failure nothing is left behind
+    (and a forced run keeps the old folder).
+    """
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not force:
+        raise ValueError(f"{out_dir}: output folder exists; choose another --out or pass --force to replace it")
+    parent = out_dir.parent if str(out_dir.parent) else Path(".")
+    parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.partial-", dir=parent))
+    os.chmod(staging, 0o777 & ~_UMASK)
+    try:
+        yield staging
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    if out_dir.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old-", dir=parent))
+        os.replace(out_dir, old / "dir")
+        os.replace(staging, out_dir)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(staging, out_dir)
+
+
+# --------------------------------------------------------------------------- reading
+def read_csv(path, required, text_columns=(), optional_empty=(), name=None) -> Table:
+    """Read a CSV file with a header row into a :class:`Table`.
+
+    Parameters
+    ----------
+    path : file to read.
+    required : columns that must be present (others are kept too).
+    text_columns : columns kept as text.
+    optional_empty : numeric columns whose cells may be empty (read as NaN); any other empty,
+        NaN or infinite cell in a numeric column is an error.
+    name : how the file is named in errors (default: the path).
+    """
+    path = Path(path)
+    label = name or str(path)
+    try:
+        handle = path.open(newline="")
+    except FileNotFoundError:
+        raise ValueError(f"{label}: file not found") from None
+    except IsADirectoryError:
+        raise ValueError(f"{label}: is a folder, expected a CSV file") from None
+    with handle:
+        reader = csv.reader(handle)
+        try:
+            header = next(reader)
+        except StopIteration:
+            raise ValueError(f"{label}: file is empty (expected a header row)") from None
+        except (csv.Error, UnicodeDecodeError) as error:
+            raise ValueError(f"{label}: not a readable CSV file ({error})") from None
+        header = [h.strip() for h in header]
+        duplicates = {h for h in header if header.count(h) > 1}
+        if duplicates:
+            raise ValueError(f"{label}: column '{sorted(duplicates)[0]}' appears twice in the header")
+        for column in required:
+            if column not in header:
+                raise ValueError(f"{label}: missing column '{column}' (header has: {', '.join(header)})")
+        text = set(text_columns)
+        allowed_empty = set(optional_empty)
+        raw = {h: [] for h in header}
+        try:
+            for line_number, row in enumerate(reader, start=2):
+                if not row or all(not cell.strip() for cell in row):
+                    continue
+                if len(row) != len(header):
+                    raise ValueError(f"{label} line {line_number}: {len(row)} cells, the header has {len(header)}")
+                for column, cell in zip(header, row):
+                    cell = cell.strip()
+                    if column in text:
+                        raw[column].append(cell)
+                        continue
+                    if cell == "":
+                        if column in allowed_empty or column not in required:
+                            raw[column].append(math.nan)
+                            continue
+                        raise ValueError(f"{label} line {line_number}: column '{column}' is empty")
+                    try:
+                        value = float(cell)
+                    except ValueError:
+                        raise ValueError(f"{label} line {line_number}: column '{column}' is not a number "
+                                         f"({cell!r})") from None
+                    if not math.isfinite(value) and column not in allowed_empty:
+                        raise ValueError(f"{label} line {line_number}: column '{column}' is {cell} "
+                                         "(a finite number is required)")
+                    raw[column].append(value)
+        except (csv.Error, UnicodeDecodeError) as error:
+            raise ValueError(f"{label}: not a readable CSV file ({error})") from None
+    columns = {h: (np.array(v, dtype=object).astype(str) if h in text else np.array(v, dtype=float))
+               for h, v in raw.items()}
+    if not columns[header[0]].size:
+        raise ValueError(f"{label}: no data rows after the header")
+    return Table(columns, path, header)
+
+
+def check_time_column(table: Table, column: str = "t_s", strictly: bool = True) -> None:
+    """Raise if the time column does not increase (naming the first offending line)."""
+    t = table[column]
+    steps = np.diff(t)
+    bad = np.nonzero(steps <= 0 if strictly else steps < 0)[0]
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise ValueError(f"{table.path} line {i + 2}: {column} does not increase ({t[i]:g} after {t[i - 1]:g})")
+
+
+def read_telemetry(path) -> Table:
+    """``telemetry.csv``: all SPEC columns, finite, strictly increasing time."""
+    table = read_csv(path, TELEMETRY_COLUMNS)
+    check_time_column(table)
+    return table
+
+
+def read_truth(path) -> Table:
+    """``truth.csv``: the SPEC columns (extras optional), strictly increasing time."""
+    table = read_csv(path, TRUTH_COLUMNS)
+    check_time_column(table)
+    return table
+
+
+def read_labels(path) -> Table:
+    """``labels.csv``: the SPEC labels schema; feature cells may be empty (not visible)."""
+    table = read_csv(path, LABEL_COLUMNS, optional_empty=_FEATURE_COLUMNS)
+    check_time_column(table)
+    return table
+
+
+def read_measurements(path) -> Table:
+    """``measurements.csv``: labels schema plus source, found, reason, confidence."""
+    table = read_csv(path, MEASUREMENT_COLUMNS, text_columns=("source", "reason"),
+                     optional_empty=_FEATURE_COLUMNS | {"confidence"})
+    check_time_column(table)
+    bad = np.nonzero(~np.isin(table["found"], (0.0, 1.0)))[0]
+    if bad.size:
+        raise ValueError(f"{table.path} line {int(bad[0]) + 2}: column 'found' must be 0 or 1")
+    return table
+
+
+def read_frames_csv(path) -> Table:
+    """``frames.csv``: ``frame,t_s`` with increasing time."""
+    table = read_csv(path, FRAMES_COLUMNS, text_columns=("frame",))
+    check_time_column(table)
+    return table
+
+
+def read_estimates(path) -> Table:
+    """``estimates.csv``: one row per observer per frame; estimate cells may be empty (coasting)."""
+    return read_csv(path, ESTIMATE_COLUMNS, text_columns=("observer",),
+                    optional_empty={"dx_m", "dy_m", "dh_m", "width_m", "dpsi_deg", "observability"})

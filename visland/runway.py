@@ -1,0 +1,125 @@
+"""Runway geometry in the runway frame R (truth side: the estimators never read it).
+
+R has its origin at the centre of the threshold line, x along the centreline in the landing
+direction, y to the right, z down; the surface is z = 0. The aiming point E (end of the
+glide path) is at ``(D, 0, 0)`` with ``D = 320 m`` by default: 55 ft threshold crossing
+height on a 3 deg slope gives 16.764 m / tan(3 deg) = 320 m (the thesis's "350 m" in its
+section 3.3 is a slip, see ../shared/seeds/README.md).
+
+"Left" and "right" are as seen by a pilot looking along the landing direction: the left
+edge is at ``y = -width/2``.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["Runway", "RUNWAY_SIZES", "GLIDE_SLOPE_RAD", "CORNER_NAMES"]
+
+GLIDE_SLOPE_RAD = math.radians(3.0)
+
+#: Corner names in label order: threshold corners (P', P'' of thesis Fig. 3.5), then the
+#: runway-end corners.
+CORNER_NAMES = ("near_left", "near_right", "far_left", "far_right")
+
+#: Named runway sizes (length_m, width_m): the SPEC default and the range scenes vary over.
+RUNWAY_SIZES = {
+    "default": (3000.0, 45.0),
+    "regional": (1800.0, 30.0),
+    "medium": (2500.0, 45.0),
+    "long": (4000.0, 60.0),
+    "wide": (3200.0, 60.0),
+}
+
+
+@dataclass(frozen=True)
+class Runway:
+    """A rectangular runway of ``length_m`` x ``width_m`` with aiming point at ``aim_distance_m``.
+
+    ``heading_deg`` is the runway's true heading (from north), used only to place the runway
+    in NED for simulation; the estimators must recover what they need from the image.
+    """
+
+    length_m: float = 3000.0
+    width_m: float = 45.0
+    aim_distance_m: float = 320.0
+    heading_deg: float = 40.0
+
+    def __post_init__(self):
+        checks = (
+            ("length_m", self.length_m, 500.0, 6000.0),
+            ("width_m", self.width_m, 10.0, 100.0),
+            ("aim_distance_m", self.aim_distance_m, 0.0, 1000.0),
+            ("heading_deg", self.heading_deg, 0.0, 360.0),
+        )
+        for name, value, low, high in checks:
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"runway {name} must be a finite number, got {value!r}")
+            if not low <= value <= high:
+                raise ValueError(f"runway {name} must lie in [{low:g}, {high:g}], got {value:g}")
+        if self.aim_distance_m >= self.length_m:
+            raise ValueError("runway aim_distance_m must be shorter than length_m")
+
+    @classmethod
+    def named(cls, name: str, **overrides) -> "Runway":
+        """A runway of one of the sizes in :data:`RUNWAY_SIZES`."""
+        if name not in RUNWAY_SIZES:
+            raise ValueError(f"unknown runway size '{name}'; known: {', '.join(RUNWAY_SIZES)}")
+        length, width = RUNWAY_SIZES[name]
+        return cls(length_m=length, width_m=width, **overrides)
+
+    @property
+    def heading_rad(self) -> float:
+        return math.radians(self.heading_deg)
+
+    def corners_runway_m(self) -> np.ndarray:
+        """The four corners in R, shape (4, 3), in :data:`CORNER_NAMES` order."""
+        half = self.width_m / 2.0
+        return np.array([
+            [0.0, -half, 0.0],
+            [0.0, half, 0.0],
+            [self.length_m, -half, 0.0],
+            [self.length_m, half, 0.0],
+        ])
+
+    def edge_lines_runway_m(self) -> dict:
+        """The left edge, right edge and centre line as (point, unit direction) in R."""
+        half = self.width_m / 2.0
+        direction = np.array([1.0, 0.0, 0.0])
+        return {
+            "left": (np.array([0.0, -half, 0.0]), direction),
+            "right": (np.array([0.0, half, 0.0]), direction),
+            "center": (np.array([0.0, 0.0, 0.0]), direction),
+        }
+
+    def to_json_dict(self) -> dict:
+        """The ``runway.json`` content of SPEC.md (truth side only)."""
+        return {"length_m": self.length_m, "width_m": self.width_m,
+                "aim_distance_m": self.aim_distance_m, "heading_deg": self.heading_deg}
+
+    @classmethod
+    def load(cls, path) -> "Runway":
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise ValueError(f"{path}: runway file not found") from None
+        except json.JSONDecodeError as error:
+            raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
+        for key in ("length_m", "width_m", "aim_distance_m"):
+            if key not in data:
+                raise ValueError(f"{path}: missing field '{key}'")
+        try:
+            return cls(float(data["length_m"]), float(data["width_m"]), float(data["aim_distance_m"]),
+                       float(data.get("heading_deg", 40.0)))
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"{path}: {error}") from None
+
+
+def glide_path_height_m(dx_m):
+    """Height of the 3 deg glide path at deviation ``dx_m`` from the aiming point (SPEC)."""
+    return -np.asarray(dx_m, dtype=float) * math.tan(GLIDE_SLOPE_RAD)
