@@ -1,0 +1,167 @@
+"""Reading a frame folder in the SPEC.md contract (what ``detect``, ``track`` and ``process`` read).
+
+::
+
+    DIR/frames/        images sorted by name (png or jpg)
+    DIR/frames.csv     frame,t_s   (optional; else t = index / fps)
+    DIR/telemetry.csv  inertial data at >= the frame rate, interpolated to frame times
+    DIR/camera.json    intrinsics and mounting
+    DIR/truth.csv      optional, one row per frame (enables metrics)
+    DIR/labels.csv     optional, exact features (generated datasets)
+
+``frame`` in ``frames.csv`` is the 0-based index of the image in name order. Validation
+errors are one sentence naming the file, line or frame.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from visland.camera import CameraModel
+from visland.contracts import Table, read_frames_csv, read_labels, read_telemetry, read_truth
+
+__all__ = ["FrameFolder", "InertialAtFrames", "IMAGE_SUFFIXES", "interpolate_telemetry", "list_frame_files"]
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
+
+
+@dataclass
+class InertialAtFrames:
+    """Telemetry interpolated at frame times (SI units, radians)."""
+
+    t_s: np.ndarray
+    roll_rad: np.ndarray
+    pitch_rad: np.ndarray
+    heading_rad: np.ndarray
+    omega_body_rps: np.ndarray   # (n, 3)
+    v_ned_mps: np.ndarray        # (n, 3)
+
+    def __len__(self):
+        return len(self.t_s)
+
+    def sample(self, i: int) -> dict:
+        return {"t_s": float(self.t_s[i]), "roll_rad": float(self.roll_rad[i]), "pitch_rad": float(self.pitch_rad[i]),
+                "heading_rad": float(self.heading_rad[i]), "omega_body_rps": self.omega_body_rps[i],
+                "v_ned_mps": self.v_ned_mps[i]}
+
+
+def interpolate_telemetry(telemetry: Table, times_s, source: str = "telemetry.csv") -> InertialAtFrames:
+    """Interpolate telemetry columns linearly at ``times_s`` (angles unwrapped first).
+
+    Raises if the telemetry does not cover every time (naming the first uncovered frame).
+    """
+    times = np.asarray(times_s, dtype=float)
+    t = telemetry["t_s"]
+    outside = np.nonzero((times < t[0] - 1e-9) | (times > t[-1] + 1e-9))[0]
+    if outside.size:
+        i = int(outside[0])
+        raise ValueError(f"{source}: telemetry covers {t[0]:g}..{t[-1]:g} s but frame {i} is at t = {times[i]:g} s")
+
+    def interp(column, angle=False):
+        values = np.radians(telemetry[column]) if angle else telemetry[column]
+        if angle:
+            values = np.unwrap(values)
+        return np.interp(times, t, values)
+
+    omega = np.stack([np.radians(np.interp(times, t, telemetry[c])) for c in ("p_dps", "q_dps", "r_dps")], axis=1)
+    v_ned = np.stack([np.interp(times, t, telemetry[c]) for c in ("vn_mps", "ve_mps", "vd_mps")], axis=1)
+    return InertialAtFrames(t_s=times, roll_rad=interp("roll_deg", True), pitch_rad=interp("pitch_deg", True),
+                            heading_rad=interp("heading_deg", True), omega_body_rps=omega, v_ned_mps=v_ned)
+
+
+def list_frame_files(frames_dir: Path) -> list[Path]:
+    """Image files of a frames folder, sorted by name."""
+    if not frames_dir.is_dir():
+        raise ValueError(f"{frames_dir}: frames folder not found")
+    files = sorted(p for p in frames_dir.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
+    if not files:
+        raise ValueError(f"{frames_dir}: no .png or .jpg images in the frames folder")
+    return files
+
+
+class FrameFolder:
+    """A validated frame folder: frame files, their times, telemetry at those times, camera.
+
+    Parameters
+    ----------
+    root : the folder.
+    camera : override of ``root/camera.json``.
+    telemetry : path overriding ``root/telemetry.csv``.
+    frames_csv : path overriding ``root/frames.csv``.
+    fps : frame rate used when there is no frames.csv (default 25 Hz).
+    require_telemetry : raise if no telemetry (detection can run without it only with a guess
+        of the horizon, so by default it is required).
+    """
+
+    def __init__(self, root, camera: CameraModel | str | Path | None = None, telemetry=None, frames_csv=None,
+                 fps: float | None = None, require_telemetry: bool = True):
+        self.root = Path(root)
+        if not self.root.is_dir():
+            raise ValueError(f"{self.root}: input folder not found")
+        self.frame_files = list_frame_files(self.root / "frames")
+        n = len(self.frame_files)
+        frames_csv = Path(frames_csv) if frames_csv else self.root / "frames.csv"
+        if frames_csv.exists():
+            table = read_frames_csv(frames_csv)
+            try:
+                index = np.array([int(f) for f in table["frame"]])
+            except ValueError:
+                raise ValueError(f"{frames_csv}: column 'frame' must hold 0-based frame indices") from None
+            if len(index) != n or not np.array_equal(index, np.arange(n)):
+                raise ValueError(f"{frames_csv}: lists {len(index)} frames 0..{len(index) - 1} but "
+                                 f"{self.root / 'frames'} holds {n} images")
+            self.times_s = table["t_s"]
+        else:
+            fps = 25.0 if fps is None else float(fps)
+            if not (math.isfinite(fps) and fps > 0):
+                raise ValueError(f"fps must be a positive number, got {fps!r}")
+            self.times_s = np.arange(n) / fps
+        if isinstance(camera, CameraModel):
+            self.camera = camera
+        else:
+            camera_path = Path(camera) if camera else self.root / "camera.json"
+            if not camera_path.exists():
+                raise ValueError(f"{camera_path}: camera file not found (give --camera FILE)")
+            self.camera = CameraModel.load(camera_path)
+        telemetry_path = Path(telemetry) if telemetry else self.root / "telemetry.csv"
+        if telemetry_path.exists():
+            self.telemetry = read_telemetry(telemetry_path)
+            self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(telemetry_path))
+        elif require_telemetry:
+            raise ValueError(f"{telemetry_path}: telemetry file not found (give --telemetry FILE)")
+        else:
+            self.telemetry = None
+            self.inertial = None
+        truth_path = self.root / "truth.csv"
+        self.truth = read_truth(truth_path) if truth_path.exists() else None
+        if self.truth is not None and self.truth.n_rows != n:
+            raise ValueError(f"{truth_path}: {self.truth.n_rows} rows but there are {n} frames (one row per frame)")
+        labels_path = self.root / "labels.csv"
+        self.labels = read_labels(labels_path) if labels_path.exists() else None
+        if self.labels is not None and self.labels.n_rows != n:
+            raise ValueError(f"{labels_path}: {self.labels.n_rows} rows but there are {n} frames (one row per frame)")
+
+    def __len__(self) -> int:
+        return len(self.frame_files)
+
+    def read_frame(self, index: int, gray: bool = True):
+        """Read frame ``index``: ``(image, None)`` or ``(None, reason)`` when it cannot be used.
+
+        The image is uint8, (H, W) when ``gray`` else (H, W, 3) RGB. A frame of another size
+        than the camera's is refused with the reason.
+        """
+        import cv2  # heavy import kept local: the core must start fast
+        path = self.frame_files[index]
+        image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if gray else cv2.IMREAD_COLOR)
+        if image is None:
+            return None, f"frame {index} ({path.name}): unreadable image"
+        height, width = image.shape[:2]
+        if (width, height) != (self.camera.width, self.camera.height):
+            return None, (f"frame {index} ({path.name}): image is {width}x{height}, "
+                          f"camera.json says {self.camera.width}x{self.camera.height}")
+        if not gray:
+            image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+        return image, None
