@@ -1,1 +1,24 @@
-"""visland.detection stage (see the module list in its README section)."""
+"""visland.detection: find the runway in a frame, its corners, and the d_F heading measurement.
+
+Public API (stable)::
+
+    from visland.detection import DetectorParams, detect_runway, DetectionResult
+    result = detect_runway(image_gray_uint8, camera, roll_rad, pitch_rad,
+                           params=DetectorParams(), previous=None)
+
+Modules, in pipeline order (each holds one idea):
+
+- :mod:`~visland.detection.params`: :class:`DetectorParams`, the stage's one parameter set.
+- :mod:`~visland.detection.horizon`: horizon coordinates (s, d), vanishing points.
+- :mod:`~visland.detection.candidates`: Canny + Hough candidate segments in a region of interest.
+- :mod:`~visland.detection.trapezoid`: the symmetry/trapezoid model picking left, right, centre.
+- :mod:`~visland.detection.refine`: sub-pixel refinement of a line against the image gradient.
+- :mod:`~visland.detection.transverse`: threshold and runway-end lines, corners.
+- :mod:`~visland.detection.detector`: :func:`detect_runway`, tying the above together.
+- :mod:`~visland.detection.result`: :class:`DetectionResult`.
+"""
+from visland.detection.detector import detect_runway
+from visland.detection.params import DetectorParams
+from visland.detection.result import LINE_NAMES, DetectionResult
+
+__all__ = ["DetectorParams", "DetectionResult", "detect_runway", "LINE_NAMES"]

@@ -1,0 +1,210 @@
+"""DetectorParams: the one frozen parameter set of the detection stage (JSON/TOML round trip).
+
+Every number the detector uses lives here, with its unit in its name. Pixel sizes are in
+pixels of the *input* image (2048x2048 by default); the detector scales nothing by itself,
+so a user working on 1024x1024 frames halves the pixel parameters with
+:meth:`DetectorParams.scaled_to`.
+"""
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+
+__all__ = ["DetectorParams"]
+
+
+@dataclass(frozen=True)
+class DetectorParams:
+    """Parameters of :func:`visland.detection.detect_runway`.
+
+    Parameters
+    ----------
+    acquisition_max_side_px : int
+        Acquisition (no previous detection) runs Canny and the Hough transform on the ground part
+        of the frame downsampled so that its larger side is at most this many pixels (the
+        sub-pixel refinement always works on the full-resolution image).
+    tracking_max_side_px : int
+        Same for the region of interest in tracking mode.
+    blur_sigma_px : float
+        Gaussian blur applied before Canny, in pixels of the working (downsampled) image.
+    canny_low_quantile, canny_high_quantile : float
+        Canny hysteresis thresholds as quantiles of the gradient magnitude of the working
+        image's ground part (adapts to the frame's contrast; 0 < low < high < 1).
+    canny_min_high : float
+        Floor of the high Canny threshold (Sobel magnitude units), so a flat frame gives no edges.
+    hough_votes : int
+        Accumulator threshold of the probabilistic Hough transform (edge pixels on a segment).
+    hough_min_length_px : float
+        Shortest Hough segment kept, in working-image pixels.
+    hough_max_gap_px : float
+        Largest gap bridged inside a Hough segment, in working-image pixels.
+    hough_angle_step_deg : float
+        Angular resolution of the Hough transform.
+    max_candidates : int
+        At most this many segments (the longest) enter the trapezoid model.
+    max_edge_slope : float
+        Largest ``|ds/dd|`` of a runway line in horizon coordinates (s along the horizon, d
+        below it): 4 is 76 deg from the horizon's normal. Flatter lines (the horizon, roads
+        across the view, the threshold bar) are not edge candidates.
+    vp_tolerance_px : float
+        Two edges belong to one runway when their crossings of the horizon agree to this many
+        pixels plus their extrapolation uncertainty.
+    min_edge_length_px : float
+        Shortest runway edge accepted (full-resolution pixels along the line).
+    search_halfwidth_px : float
+        Half width of the band searched across a predicted line during refinement.
+    refine_samples : int
+        Most profiles sampled along one line during refinement.
+    refine_iterations : int
+        Re-sampling passes of the refinement (each narrows the band).
+    min_edge_support : float
+        Smallest fraction of a line's profiles that must hold an inlying edge.
+    max_line_residual_px : float
+        Largest RMS distance of the inlying edge points to a refined line.
+    min_contrast : float
+        Smallest grey-level step accepted as an edge or stripe.
+    roi_margin_px : float
+        Margin added around the predicted runway in tracking mode.
+    roi_margin_fraction : float
+        Extra margin as a fraction of the predicted runway's size.
+    threshold_search_fraction : float
+        The threshold is searched along the runway over this fraction of the edges' visible
+        length on each side of the near end of the edge support.
+    min_confidence : float
+        Detections below this confidence are reported as not found.
+    horizon_margin_px : float
+        The horizon from roll and pitch must cross the image enlarged by this margin.
+    """
+
+    acquisition_max_side_px: int = 1024
+    tracking_max_side_px: int = 640
+    blur_sigma_px: float = 1.0
+    canny_low_quantile: float = 0.80
+    canny_high_quantile: float = 0.93
+    canny_min_high: float = 40.0
+    hough_votes: int = 18
+    hough_min_length_px: float = 14.0
+    hough_max_gap_px: float = 3.0
+    hough_angle_step_deg: float = 0.25
+    max_candidates: int = 160
+    max_edge_slope: float = 4.0
+    vp_tolerance_px: float = 8.0
+    min_edge_length_px: float = 24.0
+    search_halfwidth_px: float = 6.0
+    refine_samples: int = 200
+    refine_iterations: int = 3
+    min_edge_support: float = 0.45
+    max_line_residual_px: float = 1.5
+    min_contrast: float = 6.0
+    roi_margin_px: float = 40.0
+    roi_margin_fraction: float = 0.15
+    threshold_search_fraction: float = 0.35
+    min_confidence: float = 0.35
+    horizon_margin_px: float = 0.0
+
+    def __post_init__(self):
+        def number(name, low, high, integer=False, open_low=False):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ValueError(f"DetectorParams.{name} must be a number, got {value!r}")
+            if integer and int(value) != value:
+                raise ValueError(f"DetectorParams.{name} must be an integer, got {value!r}")
+            if not math.isfinite(value) or value < low or value > high or (open_low and value == low):
+                bracket = "(" if open_low else "["
+                raise ValueError(f"DetectorParams.{name} must lie in {bracket}{low:g}, {high:g}], got {value!r}")
+            if integer:
+                object.__setattr__(self, name, int(value))
+
+        number("acquisition_max_side_px", 128, 8192, integer=True)
+        number("tracking_max_side_px", 64, 8192, integer=True)
+        number("blur_sigma_px", 0.0, 5.0)
+        number("canny_low_quantile", 0.0, 1.0, open_low=True)
+        number("canny_high_quantile", 0.0, 1.0, open_low=True)
+        if self.canny_low_quantile >= self.canny_high_quantile:
+            raise ValueError("DetectorParams.canny_low_quantile must be smaller than canny_high_quantile")
+        number("canny_min_high", 0.0, 2000.0)
+        number("hough_votes", 2, 10000, integer=True)
+        number("hough_min_length_px", 2.0, 10000.0)
+        number("hough_max_gap_px", 0.0, 100.0)
+        number("hough_angle_step_deg", 0.01, 5.0)
+        number("max_candidates", 4, 10000, integer=True)
+        number("max_edge_slope", 0.1, 100.0)
+        number("vp_tolerance_px", 0.1, 1000.0)
+        number("min_edge_length_px", 4.0, 10000.0)
+        number("search_halfwidth_px", 1.5, 200.0)
+        number("refine_samples", 8, 100000, integer=True)
+        number("refine_iterations", 1, 20, integer=True)
+        number("min_edge_support", 0.0, 1.0, open_low=True)
+        number("max_line_residual_px", 0.01, 100.0)
+        number("min_contrast", 0.0, 255.0)
+        number("roi_margin_px", 0.0, 4096.0)
+        number("roi_margin_fraction", 0.0, 10.0)
+        number("threshold_search_fraction", 0.01, 1.0)
+        number("min_confidence", 0.0, 1.0)
+        number("horizon_margin_px", 0.0, 100000.0)
+
+    # ----------------------------------------------------------------- variants
+    def scaled_to(self, image_side_px: int, reference_side_px: int = 2048) -> "DetectorParams":
+        """The same detector for images of another size: pixel lengths scale, counts do not."""
+        if not isinstance(image_side_px, int) or image_side_px < 16:
+            raise ValueError(f"image_side_px must be an integer of at least 16, got {image_side_px!r}")
+        k = image_side_px / float(reference_side_px)
+        return replace(self,
+                       acquisition_max_side_px=max(128, min(self.acquisition_max_side_px, image_side_px)),
+                       tracking_max_side_px=max(64, min(self.tracking_max_side_px, image_side_px)),
+                       min_edge_length_px=max(4.0, self.min_edge_length_px * k),
+                       roi_margin_px=self.roi_margin_px * k,
+                       vp_tolerance_px=max(0.1, self.vp_tolerance_px * k))
+
+    # ----------------------------------------------------------------- files
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict, source: str = "detector parameters") -> "DetectorParams":
+        """Build from a dictionary; unknown keys are an error naming the key."""
+        if not isinstance(data, dict):
+            raise ValueError(f"{source}: expected a table of parameters, got {type(data).__name__}")
+        known = {f.name for f in fields(cls)}
+        for key in data:
+            if key not in known:
+                raise ValueError(f"{source}: unknown detector parameter '{key}' (known: {', '.join(sorted(known))})")
+        try:
+            return cls(**data)
+        except ValueError as error:
+            raise ValueError(f"{source}: {error}") from None
+
+    def save(self, path) -> None:
+        """Write JSON (``.json``) or TOML (``.toml``)."""
+        path = Path(path)
+        if path.suffix.lower() == ".toml":
+            lines = ["# visland detector parameters (visland.detection.DetectorParams)"]
+            for key, value in self.to_dict().items():
+                lines.append(f"{key} = {value!r}" if not isinstance(value, float) else f"{key} = {value!r}")
+            path.write_text("\n".join(lines) + "\n")
+        elif path.suffix.lower() == ".json":
+            path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        else:
+            raise ValueError(f"{path}: detector parameters are saved as .json or .toml")
+
+    @classmethod
+    def load(cls, path) -> "DetectorParams":
+        """Read JSON or TOML written by :meth:`save` (or by hand: any subset of the fields)."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except FileNotFoundError:
+            raise ValueError(f"{path}: detector parameter file not found") from None
+        try:
+            if path.suffix.lower() == ".toml":
+                data = tomllib.loads(text)
+            elif path.suffix.lower() == ".json":
+                data = json.loads(text)
+            else:
+                raise ValueError(f"{path}: detector parameters are read from .json or .toml")
+        except (json.JSONDecodeError, tomllib.TOMLDecodeError) as error:
+            raise ValueError(f"{path}: not valid {path.suffix[1:].upper()} ({error})") from None
+        return cls.from_dict(data, source=str(path))

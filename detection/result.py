@@ -1,0 +1,136 @@
+"""DetectionResult: what one frame's detection found, what it did not, and why.
+
+Conventions (SPEC.md, :mod:`visland.camera`): pixels ``(u, v)`` with (0, 0) at the centre of
+the top-left pixel; lines ``x cos(theta) + y sin(theta) = rho`` in normalised coordinates
+``x = (u - cx)/fx``, ``y = (v - cy)/fy``, theta in [-pi/2, pi/2). Corners are in
+:data:`visland.runway.CORNER_NAMES` order (threshold corners P', P'' of thesis Fig. 3.5, then
+the runway-end corners); "left" and "right" are as seen by a pilot landing.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from visland.contracts import MEASUREMENT_COLUMNS
+from visland.runway import CORNER_NAMES
+
+__all__ = ["DetectionResult", "LINE_NAMES", "not_found"]
+
+#: The three runway lines, in measurement-column order.
+LINE_NAMES = ("left", "right", "center")
+
+_NAN_LINE = (math.nan, math.nan)
+
+
+@dataclass(frozen=True)
+class DetectionResult:
+    """The runway found in one frame (or why not).
+
+    Attributes
+    ----------
+    found : bool
+        True when both runway edges were found and the trapezoid passed every check.
+    reason : str
+        Why the runway was not found; when found, what is missing (empty if nothing).
+    confidence : float
+        0..1 (0 when not found): edge support, fit residuals, symmetry and horizon agreement.
+    corners_uv : ndarray, shape (4, 2)
+        Corner pixels in ``CORNER_NAMES`` order, NaN where not found.
+    corners_found : ndarray of bool, shape (4,)
+        Which corners were measured (intersection of an edge with the threshold or runway end
+        line, inside the image).
+    lines : dict
+        ``{"left", "right", "center"}`` -> ``(rho, theta)`` SPEC chart, NaN where not found.
+    line_residual_px : dict
+        RMS distance (pixels) of each line's inlying edge points to the refined line.
+    line_support : dict
+        Fraction of each line's sampled profiles that held an inlying edge (or stripe).
+    threshold_line, end_line : tuple
+        ``(rho, theta)`` of the threshold and of the runway end, NaN where not found.
+    vanishing_point_uv : ndarray, shape (2,)
+        Vanishing point of the runway direction (pixels), on the horizon.
+    horizon : tuple
+        ``(rho, theta)`` of the horizon from the inertial roll and pitch.
+    dF_px : float
+        Signed distance along the horizon from Q (the horizon at u = cx) to the vanishing
+        point, positive to the right (seed 001 eq. 18-19, SPEC d_F).
+    dpsi_rad : float
+        Heading deviation recovered from d_F, the roll, pitch and camera mounting.
+    roll_rad, pitch_rad : float
+        The inertial attitude the frame was detected with (kept for the next prediction).
+    mode : str
+        ``"acquisition"`` (full frame) or ``"tracking"`` (region of interest from ``previous``).
+    roi : tuple
+        ``(u0, v0, u1, v1)`` region searched, pixels (end exclusive).
+    image_size : tuple
+        ``(width, height)`` of the frame.
+    elapsed_s : float
+        Wall time spent in :func:`detect_runway`.
+    notes : tuple of str
+        Details of what was not found (also summarised in ``reason``).
+    """
+
+    found: bool
+    reason: str
+    confidence: float = 0.0
+    corners_uv: np.ndarray = field(default_factory=lambda: np.full((4, 2), np.nan))
+    corners_found: np.ndarray = field(default_factory=lambda: np.zeros(4, dtype=bool))
+    lines: dict = field(default_factory=lambda: {name: _NAN_LINE for name in LINE_NAMES})
+    line_residual_px: dict = field(default_factory=lambda: {name: math.nan for name in LINE_NAMES})
+    line_support: dict = field(default_factory=lambda: {name: 0.0 for name in LINE_NAMES})
+    threshold_line: tuple = _NAN_LINE
+    end_line: tuple = _NAN_LINE
+    vanishing_point_uv: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+    horizon: tuple = _NAN_LINE
+    dF_px: float = math.nan
+    dpsi_rad: float = math.nan
+    roll_rad: float = math.nan
+    pitch_rad: float = math.nan
+    mode: str = "acquisition"
+    roi: tuple = (0, 0, 0, 0)
+    image_size: tuple = (0, 0)
+    elapsed_s: float = 0.0
+    notes: tuple = ()
+
+    @property
+    def lines_found(self) -> dict:
+        """Which of the three lines were measured."""
+        return {name: bool(np.all(np.isfinite(self.lines[name]))) for name in LINE_NAMES}
+
+    def to_measurement_row(self, frame: int | None = None, t_s: float | None = None) -> dict:
+        """One row of ``measurements.csv`` (:data:`visland.contracts.MEASUREMENT_COLUMNS`).
+
+        Not measured features are NaN (empty cells); ``source`` is ``"detection"``. A result
+        that is not found carries no feature values at all, so nothing unconfirmed reaches
+        an estimator.
+        """
+        row = {"frame": frame, "t_s": t_s}
+        corners = self.corners_uv if self.found else np.full((4, 2), np.nan)
+        found_corners = self.corners_found if self.found else np.zeros(4, dtype=bool)
+        for k, name in enumerate(CORNER_NAMES):
+            ok = bool(found_corners[k])
+            row[f"{name}_u_px"] = float(corners[k, 0]) if ok else math.nan
+            row[f"{name}_v_px"] = float(corners[k, 1]) if ok else math.nan
+        for name in LINE_NAMES:
+            rho, theta = self.lines[name] if self.found else _NAN_LINE
+            row[f"{name}_rho"] = float(rho)
+            row[f"{name}_theta_rad"] = float(theta)
+        row["dF_px"] = float(self.dF_px) if self.found else math.nan
+        row["dpsi_deg"] = math.degrees(self.dpsi_rad) if self.found else math.nan
+        for k, name in enumerate(CORNER_NAMES):
+            row[f"{name}_visible"] = int(bool(found_corners[k]))
+        row["source"] = "detection"
+        row["found"] = int(bool(self.found))
+        row["reason"] = self.reason
+        row["confidence"] = float(self.confidence)
+        missing = [c for c in MEASUREMENT_COLUMNS if c not in row]
+        if missing:  # keeps this method in step with the contract if a column is added there
+            raise RuntimeError(f"measurement row lacks column {missing[0]}")
+        return row
+
+
+def not_found(reason: str, **fields_) -> DetectionResult:
+    """A result that found nothing, with its reason (every feature NaN, confidence 0)."""
+    return DetectionResult(found=False, reason=reason, confidence=0.0, **fields_)
