@@ -20,7 +20,8 @@ Point-mass kinematics with the flight-control loops closed:
 Guidance (an ILS autopilot flown on true position: LOC and G/S capture and track)
 ---------------------------------------------------------------------------------
 - lateral: lateral speed order ``y'_c = -V sin(chi_int) tanh(k_y dY / (V sin(chi_int)))``
-  (intercept at most ``chi_int`` = 45 deg, linear near the centreline), lateral
+  (intercept at most ``chi_int`` = 22 deg, linear near the centreline; a steeper intercept
+  would turn the runway out of the camera's 45 deg field of view), lateral
   acceleration ``a_c = k_v (y'_c - y')``, bank order ``mu_c = atan(a_c / (g cos chi_r))``
   limited to 25 deg (autopilot bank limit; the structural limit of thesis 1.3.2 is 66 deg);
 - vertical: from below the glide path in level flight, altitude hold until the glide-slope
@@ -84,9 +85,9 @@ class GuidanceParams:
     """Landing guidance gains and autopilot limits (see module docstring)."""
 
     glide_slope_deg: float = 3.0
-    intercept_angle_deg: float = 45.0
-    k_y_per_s: float = 0.12
-    k_v_per_s: float = 0.3
+    intercept_angle_deg: float = 22.0  # steeper intercepts swing the runway out of the 45 deg field of view
+    k_y_per_s: float = 0.16
+    k_v_per_s: float = 0.35
     bank_limit_deg: float = 25.0
     k_h_per_s: float = 0.25
     k_gamma_per_s: float = 0.3

@@ -1,0 +1,53 @@
+"""The inertial unit and the camera calibration error."""
+import math
+
+import numpy as np
+import pytest
+
+from visland.camera import CameraModel
+from visland.flight import simulate_flight
+from visland.scenarios import get_scenario
+from visland.sensors import ImuParams, camera_with_calibration_error, measure_imu
+
+
+@pytest.fixture(scope="module")
+def trajectory():
+    return simulate_flight(get_scenario("thesis-3"))
+
+
+def test_perfect_imu_reports_the_truth(trajectory):
+    imu = measure_imu(trajectory)
+    np.testing.assert_array_equal(imu.v_ned_mps, trajectory.v_ned_mps)
+    np.testing.assert_array_equal(imu.roll_rad, trajectory.roll_rad)
+
+
+def test_velocity_bias_is_a_constant_relative_error(trajectory):
+    imu = measure_imu(trajectory, ImuParams(velocity_bias_fraction=0.05))
+    np.testing.assert_allclose(imu.v_ned_mps, 1.05 * trajectory.v_ned_mps)
+
+
+def test_noise_is_seeded_and_sized(trajectory):
+    params = ImuParams(attitude_noise_deg=0.1, velocity_noise_mps=0.2, seed=3)
+    a, b = measure_imu(trajectory, params), measure_imu(trajectory, params)
+    np.testing.assert_array_equal(a.pitch_rad, b.pitch_rad)
+    assert np.std(a.v_ned_mps - trajectory.v_ned_mps) == pytest.approx(0.2, rel=0.05)
+    assert np.std(np.degrees(a.roll_rad - trajectory.roll_rad)) == pytest.approx(0.1, rel=0.05)
+
+
+def test_telemetry_columns_are_in_spec_units(trajectory):
+    cols = measure_imu(trajectory).as_columns()
+    assert list(cols) == ["t_s", "roll_deg", "pitch_deg", "heading_deg", "p_dps", "q_dps", "r_dps",
+                          "vn_mps", "ve_mps", "vd_mps"]
+    assert np.all((cols["heading_deg"] >= 0) & (cols["heading_deg"] < 360))
+
+
+def test_calibration_error_turns_the_image():
+    camera = CameraModel.default(mount_rpy_deg=(0.0, 0.0, 0.0))
+    mounted = camera_with_calibration_error(camera, [0.0, 0.0, 0.5])
+    # a point far ahead on the optical axis moves by fx tan(0.5 deg) in u when the camera yaws 0.5 deg
+    p_body = np.array([1e6, 0.0, 0.0])
+    uv_nominal, _ = camera.project(camera.R_body_from_camera.T @ p_body)
+    uv_mounted, _ = mounted.project(mounted.R_body_from_camera.T @ p_body)
+    assert abs(uv_mounted[0] - uv_nominal[0]) == pytest.approx(camera.fx * math.tan(math.radians(0.5)), rel=1e-3)
+    with pytest.raises(ValueError, match="calibration error"):
+        camera_with_calibration_error(camera, 45.0)
