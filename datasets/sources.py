@@ -1,0 +1,177 @@
+"""Frame sources for offline processing: a SPEC frame folder or a video file.
+
+Both give frames in order with their times, the telemetry interpolated at those times, the
+camera, and (when present) truth and labels. Frames are decoded ahead of the analysis in a
+background thread (OpenCV releases the GIL while decoding), so decoding and analysis overlap.
+
+A frame that cannot be used (unreadable, wrong size) comes out as ``(index, None, reason)``:
+the caller flags it and carries on.
+"""
+from __future__ import annotations
+
+import concurrent.futures
+import math
+from collections import deque
+from pathlib import Path
+
+import numpy as np
+
+from visland.camera import CameraModel
+from visland.contracts import read_frames_csv, read_labels, read_telemetry, read_truth
+from visland.folder import FrameFolder, interpolate_telemetry
+
+__all__ = ["FrameSource", "FolderSource", "VideoSource", "open_source", "VIDEO_SUFFIXES"]
+
+VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".m4v", ".webm")
+
+
+class FrameSource:
+    """Common interface: ``len``, ``times_s``, ``camera``, ``inertial``, ``truth``, ``labels``, ``frames()``."""
+
+    name: str
+    camera: CameraModel
+    times_s: np.ndarray
+    inertial = None
+    truth = None
+    labels = None
+    runway_json: Path | None = None
+
+    def __len__(self) -> int:
+        return len(self.times_s)
+
+    def frames(self, gray: bool = True, prefetch: int = 4):
+        """Yield ``(index, image or None, reason or None)`` in order."""
+        raise NotImplementedError
+
+
+class FolderSource(FrameSource):
+    """A SPEC frame folder (see :class:`visland.folder.FrameFolder`)."""
+
+    def __init__(self, root, camera=None, telemetry=None, frames_csv=None, fps=None):
+        self.folder = FrameFolder(root, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps)
+        self.name = str(self.folder.root)
+        self.camera = self.folder.camera
+        self.times_s = self.folder.times_s
+        self.inertial = self.folder.inertial
+        self.truth = self.folder.truth
+        self.labels = self.folder.labels
+        runway = self.folder.root / "runway.json"
+        self.runway_json = runway if runway.exists() else None
+
+    def frames(self, gray: bool = True, prefetch: int = 4):
+        n = len(self.folder)
+        with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
+            pending = deque()
+            next_index = 0
+            while next_index < n and len(pending) < prefetch:
+                pending.append(pool.submit(self.folder.read_frame, next_index, gray))
+                next_index += 1
+            index = 0
+            while pending:
+                image, reason = pending.popleft().result()
+                if next_index < n:
+                    pending.append(pool.submit(self.folder.read_frame, next_index, gray))
+                    next_index += 1
+                yield index, image, reason
+                index += 1
+
+
+class VideoSource(FrameSource):
+    """A video file; telemetry, camera and optional truth/frames.csv sit beside it or are given.
+
+    Frame times come from ``frames_csv`` (``frame,t_s``) if given or present beside the video,
+    else from ``fps`` if given, else from the video's own frame rate.
+    """
+
+    def __init__(self, path, camera=None, telemetry=None, frames_csv=None, fps=None):
+        import cv2
+        self.path = Path(path)
+        self.name = str(self.path)
+        here = self.path.parent
+        capture = cv2.VideoCapture(str(self.path))
+        if not capture.isOpened():
+            raise ValueError(f"{self.path}: the video cannot be opened (unknown format or damaged file)")
+        self._count = _count_frames(capture)
+        video_fps = capture.get(cv2.CAP_PROP_FPS)
+        capture.release()
+        if self._count == 0:
+            raise ValueError(f"{self.path}: the video holds no decodable frame")
+        frames_csv = Path(frames_csv) if frames_csv else here / "frames.csv"
+        if frames_csv.exists():
+            table = read_frames_csv(frames_csv)
+            if table.n_rows != self._count:
+                raise ValueError(f"{frames_csv}: lists {table.n_rows} frames but {self.path} holds {self._count}")
+            self.times_s = table["t_s"]
+        else:
+            rate = fps if fps is not None else video_fps
+            if not rate or not math.isfinite(rate) or rate <= 0:
+                raise ValueError(f"{self.path}: the video gives no frame rate; pass --fps or --frames-csv")
+            self.times_s = np.arange(self._count) / float(rate)
+        camera_path = Path(camera) if isinstance(camera, (str, Path)) else here / "camera.json"
+        if isinstance(camera, CameraModel):
+            self.camera = camera
+        elif camera_path.exists():
+            self.camera = CameraModel.load(camera_path)
+        else:
+            raise ValueError(f"{camera_path}: camera file not found (give --camera FILE)")
+        telemetry_path = Path(telemetry) if telemetry else here / "telemetry.csv"
+        if not telemetry_path.exists():
+            raise ValueError(f"{telemetry_path}: telemetry file not found (give --telemetry FILE)")
+        self.telemetry = read_telemetry(telemetry_path)
+        self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(telemetry_path))
+        truth = here / "truth.csv"
+        self.truth = read_truth(truth) if truth.exists() else None
+        if self.truth is not None and self.truth.n_rows != self._count:
+            raise ValueError(f"{truth}: {self.truth.n_rows} rows but {self.path} holds {self._count} frames")
+        labels = here / "labels.csv"
+        self.labels = read_labels(labels) if labels.exists() else None
+        runway = here / "runway.json"
+        self.runway_json = runway if runway.exists() else None
+
+    def frames(self, gray: bool = True, prefetch: int = 4):
+        import cv2
+        capture = cv2.VideoCapture(str(self.path))
+        queue: deque = deque()
+        with concurrent.futures.ThreadPoolExecutor(max_workers=1) as pool:
+
+            def decode():
+                ok, image = capture.read()
+                return image if ok else None
+
+            for _ in range(min(prefetch, self._count)):
+                queue.append(pool.submit(decode))
+            for index in range(self._count):
+                image = queue.popleft().result()
+                if index + prefetch < self._count:
+                    queue.append(pool.submit(decode))
+                if image is None:
+                    yield index, None, f"frame {index}: could not be decoded from {self.path.name}"
+                    continue
+                height, width = image.shape[:2]
+                if (width, height) != (self.camera.width, self.camera.height):
+                    yield index, None, (f"frame {index}: video frames are {width}x{height}, "
+                                        f"the camera file says {self.camera.width}x{self.camera.height}")
+                    continue
+                image = cv2.cvtColor(image, cv2.COLOR_BGR2GRAY if gray else cv2.COLOR_BGR2RGB)
+                yield index, image, None
+        capture.release()
+
+
+def _count_frames(capture) -> int:
+    """Frames a video really holds (the container's count is often wrong): grab them all."""
+    count = 0
+    while capture.grab():
+        count += 1
+    return count
+
+
+def open_source(path, camera=None, telemetry=None, frames_csv=None, fps=None) -> FrameSource:
+    """A frame folder or a video file, by what ``path`` is."""
+    path = Path(path)
+    if path.is_dir():
+        return FolderSource(path, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps)
+    if path.is_file() and path.suffix.lower() in VIDEO_SUFFIXES:
+        return VideoSource(path, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps)
+    if not path.exists():
+        raise ValueError(f"{path}: input not found (give a frame folder or a video file)")
+    raise ValueError(f"{path}: not a frame folder nor a video ({', '.join(VIDEO_SUFFIXES)})")
