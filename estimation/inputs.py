@@ -1,0 +1,333 @@
+"""Input preparation (issue item 1): telemetry plus image measurements -> one ObserverInput per step.
+
+What the observers need and how it is obtained (SPEC frames, see :mod:`visland.frames`):
+
+- Heading deviation ``dpsi`` from the vanishing-point feature d_F (seed 001 eq. 18-19, for any
+  camera mounting: :func:`visland.features.dpsi_from_dF`) with the inertial roll and pitch.
+- The runway heading ``psi_rwy = heading - dpsi`` is a constant: each frame gives one sample
+  and the estimate is their causal running mean (circular), so the heading deviation used at a
+  step is ``dpsi = heading - psi_rwy_hat``, available at the inertial rate and far less noisy
+  than one frame's d_F.
+- Velocities in the runway axes R (= the virtual-frame axes V): ``v_R = Rz(-psi_rwy_hat) v_NED``;
+  in camera axes ``v_C = R_camera_from_runway v_R``.
+- Camera angular velocity ``w_C = R_body_from_camera^T (p, q, r)``.
+- ``R_runway_from_camera = Rz(dpsi) Ry(pitch) Rx(roll) R_body_from_camera`` and the runway down
+  axis in C, ``n_C = R_camera_from_runway [0 0 1]`` (thesis 3.33).
+- Threshold corners P' (near left) and P'' (near right) in the virtual frame (thesis 3.23:
+  ``y_v = (X_v/Z_v, Y_v/Z_v)`` of the ray ``R_runway_from_camera (x, y, 1)``), from their pixels.
+- The left and right edge lines ``(rho, theta)`` (SPEC chart) and the centre line, as measured.
+
+Steps are the telemetry samples from the first to the last frame, plus the frame times that
+are not on the telemetry grid (inertial data interpolated there, angles unwrapped). A frame
+whose measurement is missing (found = 0, empty cells, a corner outside the image) leaves its
+step without that feature: the observers coast across it and say so.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from visland.camera import CameraModel
+from visland.contracts import Table
+from visland.features import batch_R_camera_from_runway, dpsi_from_dF, virtual_from_pixels
+from visland.frames import wrap_pi
+
+from visland.estimation.base import ObserverInput
+
+__all__ = ["InertialSeries", "FeatureSeries", "PreparedInputs", "prepare_inputs", "TIME_MATCH_S"]
+
+#: Frame times within this of a telemetry sample share its step.
+TIME_MATCH_S = 1e-6
+
+_NEAR_CORNERS = ("near_left", "near_right")
+
+
+@dataclass
+class InertialSeries:
+    """Inertial data at the unit's rate, SI units (radians, rad/s, m/s).
+
+    Attributes: ``t_s (n,)``, ``roll_rad``, ``pitch_rad``, ``heading_rad (n,)`` (unwrapped),
+    ``omega_body_rps (n, 3)`` body rates (p, q, r), ``v_ned_mps (n, 3)`` ground velocity.
+    """
+
+    t_s: np.ndarray
+    roll_rad: np.ndarray
+    pitch_rad: np.ndarray
+    heading_rad: np.ndarray
+    omega_body_rps: np.ndarray
+    v_ned_mps: np.ndarray
+
+    def __post_init__(self):
+        n = len(self.t_s)
+        for name in ("roll_rad", "pitch_rad", "heading_rad"):
+            if np.shape(getattr(self, name)) != (n,):
+                raise ValueError(f"InertialSeries.{name} must have shape ({n},)")
+        for name in ("omega_body_rps", "v_ned_mps"):
+            if np.shape(getattr(self, name)) != (n, 3):
+                raise ValueError(f"InertialSeries.{name} must have shape ({n}, 3)")
+        for name in ("t_s", "roll_rad", "pitch_rad", "heading_rad", "omega_body_rps", "v_ned_mps"):
+            values = np.asarray(getattr(self, name), dtype=float)
+            if not np.isfinite(values).all():
+                raise ValueError(f"telemetry: {name} holds a NaN or infinite value")
+            setattr(self, name, values)
+        if n < 2 or np.any(np.diff(self.t_s) <= 0):
+            raise ValueError("telemetry: time must increase strictly over at least two samples")
+
+    @classmethod
+    def from_table(cls, table: Table) -> "InertialSeries":
+        """From a ``telemetry.csv`` table (:func:`visland.contracts.read_telemetry`)."""
+        return cls(t_s=table["t_s"], roll_rad=np.unwrap(np.radians(table["roll_deg"])),
+                   pitch_rad=np.radians(table["pitch_deg"]),
+                   heading_rad=np.unwrap(np.radians(table["heading_deg"])),
+                   omega_body_rps=np.radians(np.stack([table["p_dps"], table["q_dps"], table["r_dps"]], axis=1)),
+                   v_ned_mps=np.stack([table["vn_mps"], table["ve_mps"], table["vd_mps"]], axis=1))
+
+    @classmethod
+    def from_imu(cls, imu) -> "InertialSeries":
+        """From :class:`visland.sensors.ImuSamples` (a simulation, no files)."""
+        return cls(t_s=imu.t_s, roll_rad=np.unwrap(imu.roll_rad), pitch_rad=imu.pitch_rad,
+                   heading_rad=np.unwrap(imu.heading_rad), omega_body_rps=imu.omega_body_rps,
+                   v_ned_mps=imu.v_ned_mps)
+
+    def at(self, times_s) -> "InertialSeries":
+        """Linear interpolation at ``times_s`` (inside the covered span)."""
+        times = np.asarray(times_s, dtype=float)
+        if times.size and (times.min() < self.t_s[0] - TIME_MATCH_S or times.max() > self.t_s[-1] + TIME_MATCH_S):
+            raise ValueError(f"telemetry covers {self.t_s[0]:g}..{self.t_s[-1]:g} s but the measurements span "
+                             f"{times.min():g}..{times.max():g} s")
+
+        def interp(series):
+            if series.ndim == 1:
+                return np.interp(times, self.t_s, series)
+            return np.stack([np.interp(times, self.t_s, series[:, k]) for k in range(series.shape[1])], axis=1)
+
+        return InertialSeries(times, interp(self.roll_rad), interp(self.pitch_rad), interp(self.heading_rad),
+                              interp(self.omega_body_rps), interp(self.v_ned_mps))
+
+
+@dataclass
+class FeatureSeries:
+    """Image measurements, one row per camera frame (NaN where not measured).
+
+    Attributes
+    ----------
+    t_s : (m,) frame times.
+    near_uv_px : (m, 2, 2) pixels of P' (near left) and P'' (near right).
+    lines : (m, 2, 2) ``[[rho_l, theta_l], [rho_r, theta_r]]`` left and right edges, SPEC chart.
+    center_line : (m, 2) ``[rho, theta]`` of the centre line.
+    dF_px : (m,) vanishing-point feature d_F (SPEC), pixels.
+    points_ok, lines_ok : (m,) bool, whether the frame measured both near corners / both edges.
+    reason : (m,) str, why a frame measured nothing ("" when it did).
+    """
+
+    t_s: np.ndarray
+    near_uv_px: np.ndarray
+    lines: np.ndarray
+    center_line: np.ndarray
+    dF_px: np.ndarray
+    points_ok: np.ndarray
+    lines_ok: np.ndarray
+    reason: np.ndarray = field(default=None)
+
+    def __post_init__(self):
+        m = len(self.t_s)
+        if self.reason is None:
+            self.reason = np.full(m, "", dtype=object)
+        if m < 1:
+            raise ValueError("measurements: no frames")
+        if np.any(np.diff(self.t_s) <= 0):
+            raise ValueError("measurements: frame time must increase strictly")
+
+    def __len__(self):
+        return len(self.t_s)
+
+    @classmethod
+    def from_table(cls, table: Table) -> "FeatureSeries":
+        """From ``labels.csv`` or ``measurements.csv`` (SPEC labels schema).
+
+        A corner is used when its two cells are filled and, if the table has them, its
+        ``*_visible`` flag is 1; with a ``found`` column, rows with found = 0 measure nothing.
+        """
+        m = table.n_rows
+        uv = np.stack([np.stack([table[f"{c}_u_px"], table[f"{c}_v_px"]], axis=-1) for c in _NEAR_CORNERS], axis=1)
+        visible = np.ones((m, 2), dtype=bool)
+        for k, c in enumerate(_NEAR_CORNERS):
+            if f"{c}_visible" in table:
+                flags = table[f"{c}_visible"]
+                visible[:, k] = np.nan_to_num(flags, nan=0.0) > 0.5
+        found = np.ones(m, dtype=bool)
+        if "found" in table:
+            found = table["found"] > 0.5
+        lines = np.stack([np.stack([table["left_rho"], table["left_theta_rad"]], axis=-1),
+                          np.stack([table["right_rho"], table["right_theta_rad"]], axis=-1)], axis=1)
+        center = np.stack([table["center_rho"], table["center_theta_rad"]], axis=-1)
+        points_ok = found & np.isfinite(uv).all(axis=(1, 2)) & visible.all(axis=1)
+        lines_ok = found & np.isfinite(lines).all(axis=(1, 2))
+        reason = np.full(m, "", dtype=object)
+        source_reason = table["reason"] if "reason" in table else np.full(m, "", dtype=object)
+        for i in range(m):
+            if not found[i]:
+                reason[i] = f"not found ({source_reason[i]})" if source_reason[i] else "not found"
+            elif not points_ok[i] and not lines_ok[i]:
+                reason[i] = "no usable corners or lines"
+            elif not points_ok[i]:
+                reason[i] = "near corners not measured" if visible.all(axis=1)[i] else "near corner outside the image"
+        dF = np.where(found, table["dF_px"], np.nan)
+        return cls(t_s=np.asarray(table["t_s"], dtype=float), near_uv_px=np.where(points_ok[:, None, None], uv, np.nan),
+                   lines=np.where(lines_ok[:, None, None], lines, np.nan), center_line=np.where(found[:, None], center, np.nan),
+                   dF_px=dF, points_ok=points_ok, lines_ok=lines_ok, reason=reason)
+
+    @classmethod
+    def from_ideal(cls, features) -> "FeatureSeries":
+        """From :class:`visland.features.IdealFeatures` (a simulation, no files)."""
+        m = len(features)
+        uv = features.corners_uv[:, :2, :]
+        visible = features.corners_visible[:, :2].all(axis=1)
+        points_ok = visible & np.isfinite(uv).all(axis=(1, 2))
+        lines = np.stack([np.stack(features.lines["left"], axis=-1), np.stack(features.lines["right"], axis=-1)], axis=1)
+        lines_ok = np.isfinite(lines).all(axis=(1, 2))
+        reason = np.array(["" if p else "near corner outside the image" for p in points_ok], dtype=object)
+        return cls(t_s=np.asarray(features.t_s, dtype=float), near_uv_px=np.where(points_ok[:, None, None], uv, np.nan),
+                   lines=np.where(lines_ok[:, None, None], lines, np.nan),
+                   center_line=np.stack(features.lines["center"], axis=-1), dF_px=np.asarray(features.dF_px, dtype=float),
+                   points_ok=points_ok, lines_ok=lines_ok, reason=reason)
+
+
+@dataclass
+class PreparedInputs:
+    """Everything the observers consume, step by step.
+
+    Attributes
+    ----------
+    steps : list of :class:`ObserverInput`, one per step (inertial rate plus off-grid frames).
+    t_s : (N,) step times.
+    frame_of_step : (N,) int, the frame measured at each step, -1 for none.
+    step_of_frame : (m,) int, the step of each frame.
+    frame_t_s : (m,) frame times.
+    psi_runway_rad : (N,) running estimate of the runway heading (NaN before the first d_F).
+    dpsi_rad : (N,) heading deviation used at each step.
+    dpsi_frame_rad : (m,) heading deviation from each frame's own d_F (NaN without d_F).
+    frame_reason : (m,) why a frame gave no usable measurement ("" when it did).
+    points_ok, lines_ok : (m,) which frames carry usable points / lines for the observers.
+    """
+
+    steps: list
+    t_s: np.ndarray
+    frame_of_step: np.ndarray
+    step_of_frame: np.ndarray
+    frame_t_s: np.ndarray
+    psi_runway_rad: np.ndarray
+    dpsi_rad: np.ndarray
+    dpsi_frame_rad: np.ndarray
+    frame_reason: np.ndarray
+    points_ok: np.ndarray
+    lines_ok: np.ndarray
+
+    def __len__(self):
+        return len(self.steps)
+
+    def first_step_with(self, features: str) -> int | None:
+        """Index of the first step carrying a measurement of ``features`` ("points" or "lines")."""
+        ok = self.points_ok if features == "points" else self.lines_ok
+        frames = np.nonzero(ok)[0]
+        return int(self.step_of_frame[frames[0]]) if frames.size else None
+
+
+def _circular_running_mean(angles_rad: np.ndarray) -> np.ndarray:
+    """Causal running mean of angles (NaN entries skipped; NaN until the first valid one)."""
+    valid = np.isfinite(angles_rad)
+    c = np.cumsum(np.where(valid, np.cos(np.nan_to_num(angles_rad)), 0.0))
+    s = np.cumsum(np.where(valid, np.sin(np.nan_to_num(angles_rad)), 0.0))
+    count = np.cumsum(valid)
+    return np.where(count > 0, np.arctan2(s, c), np.nan)
+
+
+def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: CameraModel) -> PreparedInputs:
+    """Build the per-step observer inputs (see the module docstring for each quantity).
+
+    Parameters
+    ----------
+    inertial : telemetry at its own rate (>= the frame rate), covering every frame time.
+    features : image measurements per frame.
+    camera : the nominal camera (``camera.json``): intrinsics and mounting.
+    """
+    frame_t = features.t_s
+    if frame_t[0] < inertial.t_s[0] - TIME_MATCH_S or frame_t[-1] > inertial.t_s[-1] + TIME_MATCH_S:
+        raise ValueError(f"telemetry covers {inertial.t_s[0]:g}..{inertial.t_s[-1]:g} s but the frames span "
+                         f"{frame_t[0]:g}..{frame_t[-1]:g} s")
+    # ---- step times: telemetry samples within the frame span, plus off-grid frame times
+    inside = (inertial.t_s >= frame_t[0] - TIME_MATCH_S) & (inertial.t_s <= frame_t[-1] + TIME_MATCH_S)
+    grid = inertial.t_s[inside]
+    nearest = np.clip(np.searchsorted(grid, frame_t), 0, max(len(grid) - 1, 0))
+    on_grid = np.zeros(len(frame_t), dtype=bool)
+    if grid.size:
+        for k in (nearest, np.clip(nearest - 1, 0, len(grid) - 1)):
+            on_grid |= np.abs(grid[k] - frame_t) <= TIME_MATCH_S
+    times = np.union1d(grid, frame_t[~on_grid])
+    step_of_frame = np.clip(np.searchsorted(times, frame_t - TIME_MATCH_S), 0, len(times) - 1)
+    frame_of_step = np.full(len(times), -1, dtype=int)
+    frame_of_step[step_of_frame] = np.arange(len(frame_t))
+    ins = inertial.at(times)
+
+    # ---- heading: dpsi per frame from d_F, runway heading as a filtered constant
+    ins_f = inertial.at(frame_t)
+    dpsi_frame = np.full(len(frame_t), np.nan)
+    has_dF = np.isfinite(features.dF_px)
+    if has_dF.any():
+        dpsi_frame[has_dF] = dpsi_from_dF(features.dF_px[has_dF], ins_f.roll_rad[has_dF], ins_f.pitch_rad[has_dF],
+                                          camera)
+    psi_rwy_frame = _circular_running_mean(ins_f.heading_rad - dpsi_frame)
+    # value at each step: the estimate from the frames up to that time (hold the last one)
+    last_frame = np.searchsorted(frame_t, times + TIME_MATCH_S, side="right") - 1
+    psi_rwy = np.where(last_frame >= 0, psi_rwy_frame[np.clip(last_frame, 0, None)], np.nan)
+    dpsi = wrap_pi(ins.heading_rad - psi_rwy)
+
+    # ---- rotations and velocities at every step
+    R_cr = batch_R_camera_from_runway(ins.roll_rad, ins.pitch_rad, dpsi, camera.mount_rpy_rad)
+    R_rc = np.swapaxes(R_cr, -1, -2)
+    c, s = np.cos(psi_rwy), np.sin(psi_rwy)
+    vn, ve = ins.v_ned_mps[:, 0], ins.v_ned_mps[:, 1]
+    v_runway = np.stack([c * vn + s * ve, -s * vn + c * ve, ins.v_ned_mps[:, 2]], axis=1)
+    v_camera = np.einsum("nij,nj->ni", R_cr, v_runway)
+    omega_camera = ins.omega_body_rps @ camera.R_body_from_camera       # = (R_bc^T w_B) row-wise
+    n_camera = R_cr[:, :, 2]
+
+    # ---- measurements at their steps
+    frame_steps = step_of_frame
+    yv = np.full((len(frame_t), 2, 2), np.nan)
+    pts = features.points_ok & np.isfinite(psi_rwy[frame_steps])
+    if pts.any():
+        yv[pts] = virtual_from_pixels(features.near_uv_px[pts], R_rc[frame_steps[pts]], camera)
+    lines_ok = features.lines_ok & np.isfinite(psi_rwy[frame_steps])
+    reason = features.reason.copy()
+    for i in np.nonzero((features.points_ok | features.lines_ok) & ~np.isfinite(psi_rwy[frame_steps]))[0]:
+        reason[i] = "no heading deviation yet (d_F not measured)"
+
+    steps = []
+    usable = np.isfinite(psi_rwy)
+    for j in range(len(times)):
+        f = frame_of_step[j]
+        points_j = lines_j = center_j = None
+        if f >= 0:
+            if pts[f]:
+                points_j = yv[f].copy()
+            if lines_ok[f]:
+                lines_j = features.lines[f].copy()
+                if np.isfinite(features.center_line[f]).all():
+                    center_j = features.center_line[f].copy()
+        steps.append(ObserverInput(
+            t_s=float(times[j]),
+            # before the first d_F there is no runway heading: no observer starts there (NaN marks it)
+            v_runway_mps=v_runway[j],
+            v_camera_mps=v_camera[j],
+            omega_camera_rps=omega_camera[j],
+            n_camera=n_camera[j],
+            R_runway_from_camera=R_rc[j],
+            points_yv=points_j, lines=lines_j, center_line=center_j,
+            dpsi_rad=float(dpsi[j]) if usable[j] else math.nan,
+            roll_rad=float(ins.roll_rad[j]), pitch_rad=float(ins.pitch_rad[j])))
+    return PreparedInputs(steps=steps, t_s=times, frame_of_step=frame_of_step, step_of_frame=step_of_frame,
+                          frame_t_s=frame_t, psi_runway_rad=psi_rwy, dpsi_rad=dpsi, dpsi_frame_rad=dpsi_frame,
+                          frame_reason=reason, points_ok=pts, lines_ok=lines_ok)

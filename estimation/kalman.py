@@ -1,0 +1,141 @@
+"""Kalman filter with pseudo-measurements on two points (thesis annex, "filtre de Kalman continu
+grâce aux pseudo-mesures"; the thesis's EKF_2P, SPEC ``kf-2p``), built on filterpy.
+
+In the virtual frame (runway axes at the camera, thesis 3.19-3.20) the threshold corners
+P' = (X, Y', Z) and P'' = (X, Y'', Z) share X (same distance to the threshold) and Z = dH, and
+move as a pure integrator of the known velocity::
+
+    x = [X, Y', Y'', Z],     x' = -B v,   B v = (v1, v2, v2, v3)              (3.20, annex 5.4)
+
+The image gives ``y = (X/Z, Y/Z)`` per corner, a nonlinear output; the annex turns it into
+linear *pseudo-measurements* that are zero by construction (annex 5.5)::
+
+    y'1 Z - X = 0,   y'2 Z - Y' = 0,   y''1 Z - X = 0,   y''2 Z - Y'' = 0
+
+i.e. ``z = 0 = H(y) x`` with ``H`` built from the measured ``y``: a linear time-varying system, so
+the ordinary Kalman filter applies (discretised here: ``F = I``, ``u = integral of v dt``). A
+measurement error ``delta y`` enters as ``Z delta y``, so ``R = diag((Z_hat sigma_y)^2)`` with
+``sigma_y`` the image noise carried to virtual coordinates (an angle ``sigma`` moves
+``X/Z = cot(elevation)`` by ``(1 + y1^2) sigma`` and ``Y/Z`` by about ``sqrt(1 + y1^2) sigma``).
+The initial covariance follows the height guess: ``X, Y', Y''`` are initialised as ``y Z0``, so
+their errors are ``y`` times Z's (``P0 = J J^T sigma_Z^2 + diag``, ``J = (y1, y'2, y''2, 1)``).
+
+State (``Estimate.state``): ``[X, Y', Y'', Z]`` in metres; ``dH = Z``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from visland.estimation.base import ETA_MAX, ETA_MIN, Estimate, ObserverInput
+from visland.estimation.points import PointsParams, _PointsObserver
+
+__all__ = ["KFParams", "KF2P"]
+
+
+@dataclass(frozen=True)
+class KFParams(PointsParams):
+    """Tuning of the pseudo-measurement Kalman filter.
+
+    initial_height_sigma_fraction : standard deviation of the initial dH error, as a fraction of
+        the guess (the seeds start 20 % off).
+    image_sigma_rad : image measurement noise as an angle (1 px of the SPEC camera = 1/2472 rad).
+    velocity_sigma_mps : process noise, as a random velocity error (m/s) integrated over each step.
+    """
+
+    initial_height_sigma_fraction: float = 0.25
+    image_sigma_rad: float = 1.0 / 2472.0
+    velocity_sigma_mps: float = 0.05
+
+    def __post_init__(self):
+        super().__post_init__()
+        self._check_positive("initial_height_sigma_fraction", "image_sigma_rad", "velocity_sigma_mps")
+
+
+class KF2P(_PointsObserver):
+    """Kalman filter with pseudo-measurements on P' and P'' (thesis annex 5.4-5.6), via filterpy."""
+
+    name = "kf-2p"
+    params_type = KFParams
+
+    def _reset(self, first: ObserverInput, dh0_m: float, measurement: np.ndarray) -> None:
+        from filterpy.kalman import KalmanFilter      # heavy import kept out of the CLI start-up
+        p = self.params
+        y = measurement
+        y1 = 0.5 * (y[0, 0] + y[1, 0])
+        kf = KalmanFilter(dim_x=4, dim_z=4, dim_u=3)
+        kf.x = np.array([y1 * dh0_m, y[0, 1] * dh0_m, y[1, 1] * dh0_m, dh0_m])
+        J = np.array([y1, y[0, 1], y[1, 1], 1.0])
+        sigma_z = p.initial_height_sigma_fraction * dh0_m
+        kf.P = np.outer(J, J) * sigma_z ** 2 + np.eye(4) * 1.0
+        kf.F = np.eye(4)
+        kf.B = -np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+        self._kf = kf
+        self._H = np.zeros((4, 4))
+        self._H[0, 0] = self._H[2, 0] = -1.0
+        self._H[1, 1] = self._H[3, 2] = -1.0
+        self._R = np.zeros((4, 4))
+        self._z = np.zeros(4)
+        self._Q_unit = np.diag([1.0, 1.0, 1.0, 1.0])
+        v = first.v_runway_mps
+        self._v = (float(v[0]), float(v[1]), float(v[2]))
+        self._t_corrected = float(first.t_s)
+        self._y = [float(y[0, 0]), float(y[0, 1]), float(y[1, 0]), float(y[1, 1])]
+        self._eta = 1.0 / dh0_m
+
+    def _predict(self, d1, d2, d3, dt_s, v_old, v_new) -> None:
+        kf = self._kf
+        q = (self.params.velocity_sigma_mps * dt_s) ** 2
+        kf.predict(u=np.array([d1, d2, d3]), Q=self._Q_unit * q)       # x = F x + B u, P = F P F' + Q
+        self._sync_outputs()
+
+    def _correct(self, measurement: np.ndarray, dt_c: float, v) -> None:
+        kf = self._kf
+        H = self._H
+        H[0, 3] = measurement[0, 0]
+        H[1, 3] = measurement[0, 1]
+        H[2, 3] = measurement[1, 0]
+        H[3, 3] = measurement[1, 1]
+        z_hat = max(kf.x[3], 1.0 / ETA_MAX)
+        sigma = self.params.image_sigma_rad
+        s1 = sigma * (1.0 + 0.5 * (measurement[0, 0] ** 2 + measurement[1, 0] ** 2))
+        s2 = sigma * math.sqrt(1.0 + 0.5 * (measurement[0, 0] ** 2 + measurement[1, 0] ** 2))
+        R = self._R
+        R[0, 0] = R[2, 2] = (z_hat * s1) ** 2
+        R[1, 1] = R[3, 3] = (z_hat * s2) ** 2
+        kf.update(self._z, R=R, H=H)          # innovation y = 0 - H x, K = P H' S^-1, Joseph form
+        self._sync_outputs()
+
+    def _sync_outputs(self) -> None:
+        x = self._kf.x
+        z = float(x[3])
+        if not 1.0 / ETA_MAX <= z <= 1.0 / ETA_MIN:
+            # keep dH in the physical domain (the projection of the other observers) without touching P
+            z = min(max(z, 1.0 / ETA_MAX), 1.0 / ETA_MIN)
+            x[3] = z
+        self._y = [x[0] / z, x[1] / z, x[0] / z, x[2] / z]
+        self._eta = 1.0 / z
+
+    def _step(self, inp: ObserverInput, dt_s: float, measurement: np.ndarray | None) -> Estimate:
+        estimate = super()._step(inp, dt_s, measurement)
+        estimate.dh_m = float(self._kf.x[3])
+        return estimate
+
+    def _get_state(self) -> np.ndarray:
+        return self._kf.x.copy()
+
+    def _set_state(self, state: np.ndarray) -> None:
+        self._kf.x = np.array(state, dtype=float)
+        self._sync_outputs()
+
+    def _dh_from_state(self, state: np.ndarray) -> float:
+        z = float(state[3])
+        return z if math.isfinite(z) and z > 0 else 1.0 / ETA_MAX
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """The filter's error covariance P (4x4, m^2)."""
+        return self._kf.P.copy()
+

@@ -1,0 +1,71 @@
+"""Observer names (SPEC.md "Command line") mapped to their classes, imported lazily.
+
+Two points: oj-2p ii-2p cccs-2p ccpi-hg-2p ccpi-hosm-2p cccj-2p kf-2p
+(:mod:`visland.estimation.points`, :mod:`visland.estimation.kalman`); two lines: oj-2l ii-2l
+ccpi-2l cccj-2l ekf-2l (:mod:`visland.estimation.lines`); the ECC'15 system: ecc-hg ecc-hosm
+(:mod:`visland.estimation.ecc`).
+"""
+from __future__ import annotations
+
+import importlib
+
+from visland.estimation.base import Observer
+
+__all__ = ["OBSERVERS", "OBSERVER_NAMES", "POINT_OBSERVERS", "LINE_OBSERVERS", "ECC_OBSERVERS",
+           "observer_class", "make_observer", "observer_features"]
+
+#: name -> (module, class, features)
+OBSERVERS = {
+    "oj-2p": ("visland.estimation.points", "OJ2P", "points"),
+    "ii-2p": ("visland.estimation.points", "II2P", "points"),
+    "cccs-2p": ("visland.estimation.points", "CCCS2P", "points"),
+    "ccpi-hg-2p": ("visland.estimation.points", "CCPIHG2P", "points"),
+    "ccpi-hosm-2p": ("visland.estimation.points", "CCPIHOSM2P", "points"),
+    "cccj-2p": ("visland.estimation.points", "CCCJ2P", "points"),
+    "kf-2p": ("visland.estimation.kalman", "KF2P", "points"),
+    "oj-2l": ("visland.estimation.lines", "OJ2L", "lines"),
+    "ii-2l": ("visland.estimation.lines", "II2L", "lines"),
+    "ccpi-2l": ("visland.estimation.lines", "CCPI2L", "lines"),
+    "cccj-2l": ("visland.estimation.lines", "CCCJ2L", "lines"),
+    "ekf-2l": ("visland.estimation.lines", "EKF2L", "lines"),
+    "ecc-hg": ("visland.estimation.ecc", "EccHG", "points"),
+    "ecc-hosm": ("visland.estimation.ecc", "EccHOSM", "points"),
+}
+OBSERVER_NAMES = tuple(OBSERVERS)
+POINT_OBSERVERS = tuple(n for n in OBSERVER_NAMES if n.endswith("-2p"))
+LINE_OBSERVERS = tuple(n for n in OBSERVER_NAMES if n.endswith("-2l"))
+ECC_OBSERVERS = ("ecc-hg", "ecc-hosm")
+
+
+def observer_features(name: str) -> str:
+    """"points" or "lines" for a SPEC observer name."""
+    return _entry(name)[2]
+
+
+def _entry(name: str):
+    try:
+        return OBSERVERS[name]
+    except KeyError:
+        raise ValueError(f"unknown observer '{name}'; known: {' '.join(OBSERVER_NAMES)}") from None
+
+
+def observer_class(name: str) -> type:
+    """The class implementing observer ``name`` (imports its module on first use)."""
+    module_name, class_name, _ = _entry(name)
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as error:
+        if error.name == module_name:
+            raise ValueError(f"observer '{name}' is not available: module {module_name} is missing") from None
+        raise
+    cls = getattr(module, class_name, None)
+    if cls is None:
+        raise ValueError(f"observer '{name}' is not available: {module_name} has no {class_name}")
+    if not (isinstance(cls, type) and issubclass(cls, Observer)):
+        raise ValueError(f"observer '{name}': {module_name}.{class_name} is not an Observer")
+    return cls
+
+
+def make_observer(name: str, params=None) -> Observer:
+    """A fresh observer ``name`` with ``params`` (its parameter dataclass, a dict, or None for defaults)."""
+    return observer_class(name)(params)
