@@ -5,9 +5,10 @@ What the observers need and how it is obtained (SPEC frames, see :mod:`visland.f
 - Heading deviation ``dpsi`` from the vanishing-point feature d_F (seed 001 eq. 18-19, for any
   camera mounting: :func:`visland.features.dpsi_from_dF`) with the inertial roll and pitch.
 - The runway heading ``psi_rwy = heading - dpsi`` is a constant: each frame gives one sample
-  and the estimate is their causal running mean (circular), so the heading deviation used at a
-  step is ``dpsi = heading - psi_rwy_hat``, available at the inertial rate and far less noisy
-  than one frame's d_F.
+  and the estimate is their causal running mean (circular, each frame weighted by the squared
+  pixel span of the threshold: the vanishing point sharpens as the runway grows in the image),
+  so the heading deviation used at a step is ``dpsi = heading - psi_rwy_hat``, available at the
+  inertial rate and far less noisy than one frame's d_F.
 - Velocities in the runway axes R (= the virtual-frame axes V): ``v_R = Rz(-psi_rwy_hat) v_NED``;
   in camera axes ``v_C = R_camera_from_runway v_R``.
 - Camera angular velocity ``w_C = R_body_from_camera^T (p, q, r)``.
@@ -235,13 +236,33 @@ class PreparedInputs:
         return int(self.step_of_frame[frames[0]]) if frames.size else None
 
 
-def _circular_running_mean(angles_rad: np.ndarray) -> np.ndarray:
-    """Causal running mean of angles (NaN entries skipped; NaN until the first valid one)."""
+def _circular_running_mean(angles_rad: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Causal weighted running mean of angles (NaN entries skipped; NaN until the first valid one)."""
     valid = np.isfinite(angles_rad)
-    c = np.cumsum(np.where(valid, np.cos(np.nan_to_num(angles_rad)), 0.0))
-    s = np.cumsum(np.where(valid, np.sin(np.nan_to_num(angles_rad)), 0.0))
-    count = np.cumsum(valid)
-    return np.where(count > 0, np.arctan2(s, c), np.nan)
+    w = np.ones_like(angles_rad) if weights is None else np.where(np.isfinite(weights), weights, 0.0)
+    w = np.where(valid, w, 0.0)
+    c = np.cumsum(w * np.cos(np.nan_to_num(angles_rad)))
+    s = np.cumsum(w * np.sin(np.nan_to_num(angles_rad)))
+    total = np.cumsum(w)
+    return np.where(total > 0, np.arctan2(s, c), np.nan)
+
+
+def _heading_weights(near_uv_px: np.ndarray) -> np.ndarray:
+    """Relative weight of each frame's d_F: the squared pixel span of the threshold (P'P'').
+
+    The vanishing point comes from the edges; for a given pixel noise its angular error shrinks
+    as the runway grows in the image (roughly as 1 / its size), so an inverse-variance mean
+    weighs each frame by the squared size. Frames without both corners reuse the last weight.
+    """
+    span = np.hypot(near_uv_px[:, 1, 0] - near_uv_px[:, 0, 0], near_uv_px[:, 1, 1] - near_uv_px[:, 0, 1])
+    weights = span ** 2
+    last = 1.0
+    for i in range(len(weights)):
+        if np.isfinite(weights[i]) and weights[i] > 0:
+            last = weights[i]
+        else:
+            weights[i] = last
+    return weights
 
 
 def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: CameraModel) -> PreparedInputs:
@@ -278,7 +299,7 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     if has_dF.any():
         dpsi_frame[has_dF] = dpsi_from_dF(features.dF_px[has_dF], ins_f.roll_rad[has_dF], ins_f.pitch_rad[has_dF],
                                           camera)
-    psi_rwy_frame = _circular_running_mean(ins_f.heading_rad - dpsi_frame)
+    psi_rwy_frame = _circular_running_mean(ins_f.heading_rad - dpsi_frame, _heading_weights(features.near_uv_px))
     # value at each step: the estimate from the frames up to that time (hold the last one)
     last_frame = np.searchsorted(frame_t, times + TIME_MATCH_S, side="right") - 1
     psi_rwy = np.where(last_frame >= 0, psi_rwy_frame[np.clip(last_frame, 0, None)], np.nan)

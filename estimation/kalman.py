@@ -13,10 +13,21 @@ linear *pseudo-measurements* that are zero by construction (annex 5.5)::
     y'1 Z - X = 0,   y'2 Z - Y' = 0,   y''1 Z - X = 0,   y''2 Z - Y'' = 0
 
 i.e. ``z = 0 = H(y) x`` with ``H`` built from the measured ``y``: a linear time-varying system, so
-the ordinary Kalman filter applies (discretised here: ``F = I``, ``u = integral of v dt``). A
-measurement error ``delta y`` enters as ``Z delta y``, so ``R = diag((Z_hat sigma_y)^2)`` with
+the ordinary Kalman filter applies (discretised here: ``F = I``, ``u = integral of v dt``).
+
+One change from the annex: ``H`` is evaluated at the *predicted* ratios ``y_hat = x_hat/Z_hat``
+and the pseudo-measurement becomes ``z = (y_hat - y) Z_hat``, which leaves the innovation
+``z - H x_hat = X_hat - y Z_hat`` of 5.5 unchanged. With the measured ``y`` inside ``H`` the
+measurement noise enters both ``H`` and the innovation; their product always has the same
+sign and drags the whole solution towards the trivial ``x = 0`` (it satisfies every
+pseudo-measurement): at 1 px of noise dH collapsed to 5 % of the truth within half a second.
+With ``y_hat`` the update is the extended Kalman filter of the ratio outputs multiplied by Z,
+unbiased to first order; with ideal measurements both forms coincide.
+
+A measurement error ``delta y`` enters as ``Z delta y``, so ``R = diag(Z_hat^2 sigma_y^2)`` with
 ``sigma_y`` the image noise carried to virtual coordinates (an angle ``sigma`` moves
-``X/Z = cot(elevation)`` by ``(1 + y1^2) sigma`` and ``Y/Z`` by about ``sqrt(1 + y1^2) sigma``).
+``X/Z = cot(elevation)`` by ``(1 + y1^2) sigma`` and ``Y/Z`` by about ``sqrt(1 + y1^2) sigma``)
+plus the heading error's rotation of the rays about the vertical.
 The initial covariance follows the height guess: ``X, Y', Y''`` are initialised as ``y Z0``, so
 their errors are ``y`` times Z's (``P0 = J J^T sigma_Z^2 + diag``, ``J = (y1, y'2, y''2, 1)``).
 
@@ -42,16 +53,22 @@ class KFParams(PointsParams):
     initial_height_sigma_fraction : standard deviation of the initial dH error, as a fraction of
         the guess (the seeds start 20 % off).
     image_sigma_rad : image measurement noise as an angle (1 px of the SPEC camera = 1/2472 rad).
+    heading_sigma_rad : uncertainty of the heading deviation used to build the virtual frame. The
+        heading comes from d_F (its running mean, :mod:`visland.estimation.inputs`): its error is a
+        slowly varying bias, not white noise, so it is inflated (1 deg) to keep the filter from
+        trusting the lateral rows too much early in the approach.
     velocity_sigma_mps : process noise, as a random velocity error (m/s) integrated over each step.
     """
 
     initial_height_sigma_fraction: float = 0.25
     image_sigma_rad: float = 1.0 / 2472.0
-    velocity_sigma_mps: float = 0.05
+    heading_sigma_rad: float = 0.02
+    velocity_sigma_mps: float = 0.02
 
     def __post_init__(self):
         super().__post_init__()
-        self._check_positive("initial_height_sigma_fraction", "image_sigma_rad", "velocity_sigma_mps")
+        self._check_positive("initial_height_sigma_fraction", "image_sigma_rad", "heading_sigma_rad",
+                             "velocity_sigma_mps")
 
 
 class KF2P(_PointsObserver):
@@ -93,19 +110,28 @@ class KF2P(_PointsObserver):
 
     def _correct(self, measurement: np.ndarray, dt_c: float, v) -> None:
         kf = self._kf
+        x = kf.x
+        z_hat = max(x[3], 1.0 / ETA_MAX)
+        # H at the predicted ratios y_hat = x_hat / Z_hat (see the module docstring), and the
+        # pseudo-measurement z = (y_hat - y) Z_hat, so that z - H x_hat = X_hat - y Z_hat as in 5.5
+        y_hat = (x[0] / z_hat, x[1] / z_hat, x[0] / z_hat, x[2] / z_hat)
         H = self._H
-        H[0, 3] = measurement[0, 0]
-        H[1, 3] = measurement[0, 1]
-        H[2, 3] = measurement[1, 0]
-        H[3, 3] = measurement[1, 1]
-        z_hat = max(kf.x[3], 1.0 / ETA_MAX)
-        sigma = self.params.image_sigma_rad
-        s1 = sigma * (1.0 + 0.5 * (measurement[0, 0] ** 2 + measurement[1, 0] ** 2))
-        s2 = sigma * math.sqrt(1.0 + 0.5 * (measurement[0, 0] ** 2 + measurement[1, 0] ** 2))
+        z = self._z
+        y_meas = (measurement[0, 0], measurement[0, 1], measurement[1, 0], measurement[1, 1])
+        for i in range(4):
+            H[i, 3] = y_hat[i]
+            z[i] = (y_hat[i] - y_meas[i]) * z_hat
+        p = self.params
+        y1_sq = 0.5 * (measurement[0, 0] ** 2 + measurement[1, 0] ** 2)
+        y2_sq = 0.5 * (measurement[0, 1] ** 2 + measurement[1, 1] ** 2)
+        # image noise through the virtual-frame sensitivity, plus the heading error's rotation of the
+        # ray about the vertical (delta y1 = y2 dpsi, delta y2 = -y1 dpsi)
+        var1 = (p.image_sigma_rad * (1.0 + y1_sq)) ** 2 + y2_sq * p.heading_sigma_rad ** 2
+        var2 = p.image_sigma_rad ** 2 * (1.0 + y1_sq) + y1_sq * p.heading_sigma_rad ** 2
         R = self._R
-        R[0, 0] = R[2, 2] = (z_hat * s1) ** 2
-        R[1, 1] = R[3, 3] = (z_hat * s2) ** 2
-        kf.update(self._z, R=R, H=H)          # innovation y = 0 - H x, K = P H' S^-1, Joseph form
+        R[0, 0] = R[2, 2] = z_hat * z_hat * var1
+        R[1, 1] = R[3, 3] = z_hat * z_hat * var2
+        kf.update(z, R=R, H=H)                # innovation z - H x, K = P H' S^-1, Joseph-form covariance
         self._sync_outputs()
 
     def _sync_outputs(self) -> None:
