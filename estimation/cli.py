@@ -1,5 +1,94 @@
-"""Command-line registration of the visland.estimation stage (light: no heavy imports here)."""
+"""Command-line registration of the visland.estimation stage (light: no heavy imports here).
+
+Commands: ``visland estimate`` (observers on a folder), ``visland study`` (the seeds' studies)
+and the bench target ``visland bench estimate``.
+"""
+from __future__ import annotations
+
+import json
+
+OBSERVER_HELP = ("two points: oj-2p ii-2p cccs-2p ccpi-hg-2p ccpi-hosm-2p cccj-2p kf-2p; two lines: oj-2l ii-2l "
+                 "ccpi-2l cccj-2l ekf-2l; ECC'15: ecc-hg ecc-hosm; or 'points', 'lines', 'all'")
+STUDY_NAMES = ("table-5.3", "table-5.4", "table-5.6", "table-5.7", "table-5.8", "table-5.10", "table-5.12",
+               "ecc", "academic")
+
+
+def _expand_observers(names):
+    from visland.estimation.registry import ECC_OBSERVERS, LINE_OBSERVERS, OBSERVER_NAMES, POINT_OBSERVERS
+    groups = {"points": POINT_OBSERVERS, "lines": LINE_OBSERVERS, "ecc": ECC_OBSERVERS, "all": OBSERVER_NAMES}
+    out = []
+    for name in names:
+        for item in groups.get(name, (name,)):
+            if item not in out:
+                out.append(item)
+    return tuple(out)
+
+
+def _cmd_estimate(args) -> int:
+    from visland.estimation.command import EstimateOptions, estimate_folder
+    options = EstimateOptions(observers=_expand_observers(args.observer), measurements=args.measurements,
+                              initial_height_m=args.initial_height, initial_error=args.initial_error,
+                              aim_distance_m=args.aim_distance, params_file=args.params)
+    estimate_folder(args.dir, options, args.out)
+    return 0
+
+
+def _cmd_study(args) -> int:
+    from visland.estimation.study import run_study
+    out = args.out or f"study-{args.name}"
+    figures = run_study(args.name, out_dir=out, seed=args.seed)
+    print(json.dumps(figures, default=str))
+    return 0
+
+
+def _cmd_bench_estimate(args) -> int:
+    from visland.estimation.bench import bench_estimate
+    observers = _expand_observers(args.observer) if args.observer else None
+    figures = bench_estimate(observers, repeat=args.repeat, seed=args.seed)
+    print(json.dumps(figures))
+    return 0
 
 
 def register(subparsers):
     """Add this stage's commands to the visland parser."""
+    p = subparsers.add_parser(
+        "estimate", help="run observers on a folder's measurements and telemetry; write estimates.csv",
+        description="Estimate the aircraft's position relative to the runway from image measurements and "
+                    "telemetry with the thesis's observers. Writes estimates.csv (one row per observer per "
+                    "frame; coasting=1 where no measurement corrected the frame) and, when DIR/truth.csv "
+                    "exists, metrics.json beside it.")
+    p.add_argument("dir", metavar="DIR", help="folder with telemetry.csv, camera.json (and truth.csv, labels.csv)")
+    p.add_argument("--measurements", required=True, metavar="FILE|ideal",
+                   help="a measurements.csv, or 'ideal' for the folder's exact labels.csv")
+    p.add_argument("--observer", required=True, nargs="+", metavar="NAME", help=OBSERVER_HELP)
+    p.add_argument("--out", required=True, metavar="FILE", help="estimates.csv to write")
+    p.add_argument("--initial-height", type=float, default=None, metavar="M",
+                   help="initial guess of the height above the runway (required without truth.csv)")
+    p.add_argument("--initial-error", type=float, default=0.2, metavar="FRACTION",
+                   help="with truth.csv and no --initial-height: start this fraction above the true height "
+                        "(default 0.2, the seeds' 20 %%)")
+    p.add_argument("--aim-distance", type=float, default=320.0, metavar="M",
+                   help="aiming point distance past the threshold, for dX (default 320 m)")
+    p.add_argument("--params", default=None, metavar="FILE",
+                   help="observer parameters, TOML or JSON, one table per observer name")
+    p.set_defaults(func=_cmd_estimate)
+
+    p = subparsers.add_parser(
+        "study", help="rerun a seed study (thesis tables, ECC'15, seed 001) beside the seeds' numbers",
+        description="Rerun one of the seeds' simulated-measurement studies and print it beside the thesis's "
+                    "figures; writes plots and study.json into --out; ends with one JSON line.")
+    p.add_argument("name", choices=STUDY_NAMES, metavar="NAME", help=", ".join(STUDY_NAMES))
+    p.add_argument("--out", default=None, metavar="DIR", help="folder for plots and study.json (default study-NAME)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the noise generators (default 0)")
+    p.set_defaults(func=_cmd_study)
+
+
+def register_bench(bench_subparsers):
+    """Add ``visland bench estimate``."""
+    p = bench_subparsers.add_parser("estimate", help="time every observer on a 100 s, 50 Hz approach",
+                                    description="Time each observer's steps over a 100 s, 50 Hz approach (target "
+                                                "0.5 s); ends with one JSON line of per-observer timings.")
+    p.add_argument("--observer", nargs="+", default=None, metavar="NAME", help=OBSERVER_HELP + " (default all)")
+    p.add_argument("--repeat", type=int, default=5, help="runs per observer; the median is reported (default 5)")
+    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.set_defaults(func=_cmd_bench_estimate)

@@ -1,0 +1,192 @@
+"""``visland estimate``: run observers on a folder's measurements and telemetry; write estimates.csv.
+
+Reads (SPEC "File contracts"): ``DIR/telemetry.csv``, ``DIR/camera.json``, the measurements
+(``--measurements FILE``, a ``measurements.csv``, or ``ideal``: ``DIR/labels.csv``) and, when
+present, ``DIR/truth.csv`` (enables ``metrics.json`` and the default height guess).
+
+Writes ``--out FILE`` (``estimates.csv``): the SPEC columns
+``observer,t_s,dx_m,dy_m,dh_m,width_m,dpsi_deg,observability`` then ``coasting`` (1 when no
+measurement corrected that frame: the observer ran on its model) and ``reason``; one row per
+observer per frame, empty estimate cells before an observer's first measured frame. With truth,
+``metrics.json`` beside it holds the seeds' metrics per observer
+(:mod:`visland.estimation.metrics`).
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M
+from visland.estimation.registry import make_observer, observer_class, observer_features
+
+__all__ = ["EstimateOptions", "estimate_folder", "load_observer_params", "ESTIMATE_EXTRA_COLUMNS"]
+
+ESTIMATE_EXTRA_COLUMNS = ("coasting", "reason")
+
+
+@dataclass(frozen=True)
+class EstimateOptions:
+    """What ``visland estimate`` does with a folder (see the command's --help)."""
+
+    observers: tuple
+    measurements: str = "ideal"
+    initial_height_m: float | None = None
+    initial_error: float = 0.2
+    aim_distance_m: float = DEFAULT_AIM_DISTANCE_M
+    params_file: str | None = None
+
+    def __post_init__(self):
+        if not self.observers:
+            raise ValueError("--observer: give at least one observer name")
+        for name in self.observers:
+            observer_class(name)          # raises with the list of known names
+        if self.initial_height_m is not None and not (math.isfinite(self.initial_height_m)
+                                                      and self.initial_height_m > 0):
+            raise ValueError(f"--initial-height must be a positive number of metres, got {self.initial_height_m!r}")
+        if not (math.isfinite(self.initial_error) and -0.9 < self.initial_error < 10):
+            raise ValueError(f"--initial-error must lie in (-0.9, 10), got {self.initial_error!r}")
+        if not (math.isfinite(self.aim_distance_m) and 0 <= self.aim_distance_m <= 2000):
+            raise ValueError(f"--aim-distance must lie in [0, 2000] m, got {self.aim_distance_m!r}")
+
+
+def load_observer_params(path) -> dict:
+    """Observer parameters from a TOML or JSON file: one table per observer name.
+
+    Example (TOML)::
+
+        [ccpi-hg-2p]
+        response_time_s = 8.0
+        damping = 0.8
+    """
+    import tomllib
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as error:
+        raise ValueError(f"{path}: cannot read the observer parameters ({error.strerror})") from None
+    try:
+        data = tomllib.loads(text) if path.suffix == ".toml" else json.loads(text)
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as error:
+        raise ValueError(f"{path}: not valid {'TOML' if path.suffix == '.toml' else 'JSON'} ({error})") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected tables named after observers")
+    out = {}
+    for name, table in data.items():
+        cls = observer_class(name)
+        out[name] = cls.params_type.from_dict(table, source=f"{path} [{name}]")
+    return out
+
+
+def _read_inputs(folder: Path, measurements: str):
+    from visland.camera import CameraModel
+    from visland.contracts import read_labels, read_measurements, read_telemetry, read_truth
+    from visland.estimation.inputs import FeatureSeries, InertialSeries
+    if not folder.is_dir():
+        raise ValueError(f"{folder}: input folder not found")
+    camera = CameraModel.load(folder / "camera.json")
+    telemetry = read_telemetry(folder / "telemetry.csv")
+    if measurements == "ideal":
+        path = folder / "labels.csv"
+        if not path.exists():
+            raise ValueError(f"{path}: --measurements ideal needs the folder's labels.csv (not found)")
+        table = read_labels(path)
+    else:
+        path = Path(measurements)
+        table = read_measurements(path)
+    features = FeatureSeries.from_table(table)
+    truth = None
+    truth_path = folder / "truth.csv"
+    if truth_path.exists():
+        truth = read_truth(truth_path)
+        if truth.n_rows != len(features) or not np.allclose(truth["t_s"], features.t_s, atol=1e-6):
+            raise ValueError(f"{truth_path}: {truth.n_rows} rows whose times do not match the {len(features)} "
+                             f"measurement frames of {path} (truth.csv has one row per frame)")
+    return camera, InertialSeries.from_table(telemetry), features, truth, path
+
+
+def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> dict:
+    """Run ``options.observers`` on ``folder``; write ``out_path`` (and metrics.json with truth).
+
+    Returns the metrics per observer (empty without truth).
+    """
+    from visland.contracts import ESTIMATE_COLUMNS, atomic_write_text, write_csv
+    from visland.estimation.inputs import prepare_inputs
+    from visland.estimation.metrics import run_metrics
+    from visland.estimation.runner import run_observer
+
+    folder = Path(folder)
+    out_path = Path(out_path)
+    if out_path.exists() and out_path.is_dir():
+        raise ValueError(f"--out {out_path}: is a folder, expected the estimates.csv file to write")
+    if not out_path.parent.exists():
+        raise ValueError(f"--out {out_path}: folder {out_path.parent} does not exist")
+    params = load_observer_params(options.params_file) if options.params_file else {}
+    camera, inertial, features, truth, meas_path = _read_inputs(folder, options.measurements)
+    prepared = prepare_inputs(inertial, features, camera)
+    n_points = int(prepared.points_ok.sum())
+    n_lines = int(prepared.lines_ok.sum())
+    echo(f"{len(features)} frames from {meas_path}: {n_points} with both threshold corners, {n_lines} with both "
+         f"edges; {len(prepared)} steps at the inertial rate")
+    dh_true = truth["dh_m"] if truth is not None else None
+    columns = {c: [] for c in ESTIMATE_COLUMNS + ESTIMATE_EXTRA_COLUMNS}
+    metrics = {}
+    for name in options.observers:
+        start = prepared.first_step_with(observer_features(name))
+        if start is None:
+            echo(f"{name}: no frame carries usable {observer_features(name)}; no estimates")
+            continue
+        frame = prepared.frame_of_step[start]
+        if options.initial_height_m is not None:
+            dh0 = options.initial_height_m
+        elif dh_true is not None:
+            dh0 = (1.0 + options.initial_error) * dh_true[frame]
+        else:
+            raise ValueError("no truth.csv in the folder: give the initial height guess with --initial-height M")
+        run = run_observer(make_observer(name, params.get(name)), prepared, dh0, options.aim_distance_m)
+        for f in range(len(run)):
+            columns["observer"].append(name)
+            columns["t_s"].append(run.t_s[f])
+            columns["dx_m"].append(run.dx_m[f])
+            columns["dy_m"].append(run.dy_m[f])
+            columns["dh_m"].append(run.dh_m[f])
+            columns["width_m"].append(run.width_m[f])
+            columns["dpsi_deg"].append(math.degrees(run.dpsi_rad[f]) if np.isfinite(run.dh_m[f]) else math.nan)
+            columns["observability"].append(run.observability[f])
+            columns["coasting"].append(int(bool(run.coasting[f])))
+            columns["reason"].append(run.reason[f])
+        n_coast = int(np.sum(run.coasting & np.isfinite(run.dh_m)))
+        line = (f"{name}: started at t = {run.start_t_s:.2f} s from dH0 = {run.dh0_m:.1f} m; "
+                f"{n_coast} frames coasted; {1e6 * run.step_time_s / max(run.n_steps, 1):.0f} us/step")
+        if dh_true is not None:
+            m = run_metrics(run.t_s, dh_true, run.dh_m, start_t_s=run.start_t_s)
+            m.update({"start_t_s": run.start_t_s, "dh0_m": run.dh0_m, "n_frames": len(run), "n_coasting": n_coast,
+                      "params": run.params})
+            metrics[name] = m
+            line += (f"; conv 5% {m['conv_time_5pct_s']:.2f} s, dH err 400/200/100 ft "
+                     f"{m['err_400ft_m']:+.3f}/{m['err_200ft_m']:+.3f}/{m['err_100ft_m']:+.3f} m")
+        echo(line)
+    write_csv(out_path, columns, ESTIMATE_COLUMNS + ESTIMATE_EXTRA_COLUMNS)
+    echo(f"wrote {out_path} ({len(columns['observer'])} rows)")
+    if metrics:
+        metrics_path = out_path.parent / "metrics.json"
+        doc = {"definitions": "visland.estimation.metrics (thesis 5.2.1): errors are dH - dH_hat in metres",
+               "measurements": str(meas_path), "observers": _json_clean(metrics)}
+        atomic_write_text(metrics_path, json.dumps(doc, indent=2) + "\n")
+        echo(f"wrote {metrics_path}")
+    return metrics
+
+
+def _json_clean(value):
+    if isinstance(value, dict):
+        return {k: _json_clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_clean(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
