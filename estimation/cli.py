@@ -36,7 +36,7 @@ def _cmd_estimate(args) -> int:
 def _cmd_study(args) -> int:
     from visland.estimation.study import run_study
     out = args.out or f"study-{args.name}"
-    figures = run_study(args.name, out_dir=out, seed=args.seed)
+    figures = run_study(args.name, out_dir=out, seed=args.seed, heading=args.heading)
     print(json.dumps(figures, default=str))
     return 0
 
@@ -80,6 +80,9 @@ def register(subparsers):
     p.add_argument("name", choices=STUDY_NAMES, metavar="NAME", help=", ".join(STUDY_NAMES))
     p.add_argument("--out", default=None, metavar="DIR", help="folder for plots and study.json (default study-NAME)")
     p.add_argument("--seed", type=int, default=0, help="seed of the noise generators (default 0)")
+    p.add_argument("--heading", choices=("dF", "truth"), default="dF",
+                   help="heading deviation from the measured d_F (default, as 'visland estimate') or known "
+                        "(noise-free d_F, as in the thesis's simulations)")
     p.set_defaults(func=_cmd_study)
 
 

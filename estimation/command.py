@@ -6,8 +6,9 @@ present, ``DIR/truth.csv`` (enables ``metrics.json`` and the default height gues
 
 Writes ``--out FILE`` (``estimates.csv``): the SPEC columns
 ``observer,t_s,dx_m,dy_m,dh_m,width_m,dpsi_deg,observability`` then ``coasting`` (1 when no
-measurement corrected that frame: the observer ran on its model) and ``reason``; one row per
-observer per frame, empty estimate cells before an observer's first measured frame. With truth,
+measurement corrected that frame: the observer ran on its model; numeric, so that
+:func:`visland.contracts.read_estimates` reads the file unchanged); one row per observer per
+frame, empty estimate cells before an observer's first measured frame. With truth,
 ``metrics.json`` beside it holds the seeds' metrics per observer
 (:mod:`visland.estimation.metrics`).
 """
@@ -25,7 +26,7 @@ from visland.estimation.registry import make_observer, observer_class, observer_
 
 __all__ = ["EstimateOptions", "estimate_folder", "load_observer_params", "ESTIMATE_EXTRA_COLUMNS"]
 
-ESTIMATE_EXTRA_COLUMNS = ("coasting", "reason")
+ESTIMATE_EXTRA_COLUMNS = ("coasting",)
 
 
 @dataclass(frozen=True)
@@ -157,14 +158,17 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
             columns["dpsi_deg"].append(math.degrees(run.dpsi_rad[f]) if np.isfinite(run.dh_m[f]) else math.nan)
             columns["observability"].append(run.observability[f])
             columns["coasting"].append(int(bool(run.coasting[f])))
-            columns["reason"].append(run.reason[f])
         n_coast = int(np.sum(run.coasting & np.isfinite(run.dh_m)))
+        reasons = {}
+        for f in np.nonzero(run.coasting & np.isfinite(run.dh_m))[0]:
+            reasons[run.reason[f]] = reasons.get(run.reason[f], 0) + 1
         line = (f"{name}: started at t = {run.start_t_s:.2f} s from dH0 = {run.dh0_m:.1f} m; "
-                f"{n_coast} frames coasted; {1e6 * run.step_time_s / max(run.n_steps, 1):.0f} us/step")
+                f"{n_coast} frames coasted{' (' + ', '.join(f'{n} {r}' for r, n in reasons.items()) + ')' if reasons else ''}; "
+                f"{1e6 * run.step_time_s / max(run.n_steps, 1):.0f} us/step")
         if dh_true is not None:
             m = run_metrics(run.t_s, dh_true, run.dh_m, start_t_s=run.start_t_s)
             m.update({"start_t_s": run.start_t_s, "dh0_m": run.dh0_m, "n_frames": len(run), "n_coasting": n_coast,
-                      "params": run.params})
+                      "coasting_reasons": reasons, "params": run.params})
             metrics[name] = m
             line += (f"; conv 5% {m['conv_time_5pct_s']:.2f} s, dH err 400/200/100 ft "
                      f"{m['err_400ft_m']:+.3f}/{m['err_200ft_m']:+.3f}/{m['err_100ft_m']:+.3f} m")

@@ -15,7 +15,7 @@ Moore-Penrose pseudo-inverse of its Jacobian (eq. 16-17)::
 
 with the high-gain ``kappa = Lambda^-1 K (y - z_hat)`` (eq. 18-20: ``K1 = 2 xi omega``,
 ``K2 = omega^2``; the paper's tuning xi = 0.7, omega = 1, lambda_i = 1) or the high-order
-sliding-mode correction (eq. 22-24: a1 = 1.5, a2 = 1.1, L = 0.0005). The pseudo-inverse has the
+sliding-mode correction (eq. 22-24: a1 = 1.5, a2 = 1.1; L = 0.003 here, see EccHOSMParams). The pseudo-inverse has the
 closed form of :func:`visland.estimation.points.pseudo_inverse_correction`.
 
 The time discretisation is that of :mod:`visland.estimation.points` (exact model flow between
@@ -50,9 +50,16 @@ class EccHGParams(PointsParams):
 
 @dataclass(frozen=True)
 class EccHOSMParams(PointsParams):
-    """ECC'15 sliding-mode tuning (eq. 23 and section IV.B): a1, a2 and the bound L."""
+    """ECC'15 sliding-mode tuning (eq. 23 and section IV.B): a1, a2 and the bound L.
 
-    lipschitz: float = 5.0e-4
+    The paper's ``L = 0.0005`` is for its outputs ``y = epsilon (...)``, scaled by a focal length
+    epsilon whose unit it does not state; in the normalised virtual coordinates used here
+    (focal 1) that bound is too small for the correction to pull a 20 % height error in
+    before the threshold (on ecc-1..3 it never enters the 5 % band). ``L = 0.003`` converges in
+    2-3 s on ideal measurements and stays within 0.8 m at 100 ft with 1 px of noise.
+    """
+
+    lipschitz: float = 3.0e-3
     a1: float = LEVANT_A1
     a2: float = LEVANT_A2
 

@@ -69,8 +69,7 @@ SLOW_5PX_PARAMS = {
     "cccs-2p": {"response_time_s": 12.0},
     "ccpi-hg-2p": {"response_time_s": 12.0},
     "cccj-2p": {"response_time_s": 12.0},
-    "ccpi-hosm-2p": {"lipschitz": 5.0e-4},
-    "ii-2p": {"lambda_": 2.5e-5},
+    "ii-2p": {"lambda_": 5.0e-5},
     "oj-2p": {"k_y": 1.5, "k_eta": 2.5e-4},
     "kf-2p": {"image_sigma_rad": 5.0 / 2472.0},
 }
@@ -148,8 +147,15 @@ class Case:
     dy_true_m: np.ndarray
 
 
-def simulate_case(scenario_name: str, condition: Condition, seed: int = 0) -> Case:
-    """Fly ``scenario_name`` with the degradations of ``condition`` and prepare the inputs."""
+def simulate_case(scenario_name: str, condition: Condition, seed: int = 0, heading: str = "dF") -> Case:
+    """Fly ``scenario_name`` with the degradations of ``condition`` and prepare the inputs.
+
+    ``heading="dF"`` (default) takes the heading deviation from the measured d_F as ``visland
+    estimate`` does; ``heading="truth"`` gives the observers the d_F of the noise-free image (the
+    heading deviation known, as in the thesis's simulations), everything else unchanged.
+    """
+    if heading not in ("dF", "truth"):
+        raise ValueError(f"heading must be 'dF' or 'truth', got {heading!r}")
     from visland.scenarios import resolve_scenario
     from visland.sensors import ImuParams
     from visland.simulate import SimulationOptions, run_simulation
@@ -158,8 +164,11 @@ def simulate_case(scenario_name: str, condition: Condition, seed: int = 0) -> Ca
                                 imu=ImuParams(velocity_bias_fraction=condition.velocity_bias_fraction, seed=seed),
                                 seed=seed)
     result = run_simulation(resolve_scenario(scenario_name), options)
-    prepared = prepare_inputs(InertialSeries.from_imu(result.imu), FeatureSeries.from_ideal(result.features),
-                              result.options.camera)
+    features = FeatureSeries.from_ideal(result.features)
+    if heading == "truth" and condition.pixel_noise_px:
+        clean = run_simulation(resolve_scenario(scenario_name), replace(options, pixel_noise_px=0.0))
+        features.dF_px = np.asarray(clean.features.dF_px, dtype=float).copy()
+    prepared = prepare_inputs(InertialSeries.from_imu(result.imu), features, result.options.camera)
     if condition.relative_noise:
         prepared = _with_relative_noise(prepared, condition.relative_noise, seed)
     p = result.frames.p_runway_m
@@ -217,8 +226,12 @@ def _flag(ours, theirs) -> str:
 
 
 # --------------------------------------------------------------------------- studies
-def run_study(name: str, out_dir=None, seed: int = 0, echo=print) -> dict:
-    """Run study ``name``; print its table(s) with ``echo``; return the figures (the JSON line)."""
+def run_study(name: str, out_dir=None, seed: int = 0, heading: str = "dF", echo=print) -> dict:
+    """Run study ``name``; print its table(s) with ``echo``; return the figures (the JSON line).
+
+    ``heading``: "dF" (the heading deviation measured from the image, as ``visland estimate``) or
+    "truth" (known, as in the thesis's simulations); see :func:`simulate_case`.
+    """
     if name not in STUDIES:
         raise ValueError(f"unknown study '{name}'; known: {', '.join(STUDIES)}")
     spec = STUDIES[name]
@@ -229,12 +242,12 @@ def run_study(name: str, out_dir=None, seed: int = 0, echo=print) -> dict:
     if spec.kind == "academic":
         figures = _academic_study(spec, out, echo)
     elif spec.kind == "ecc":
-        figures = _ecc_study(spec, out, seed, echo)
+        figures = _ecc_study(spec, out, seed, echo, heading)
     elif spec.kind == "std-along":
-        figures = _std_along_study(spec, out, seed, echo)
+        figures = _std_along_study(spec, out, seed, echo, heading)
     else:
-        figures = _table_study(spec, out, seed, echo)
-    figures = {"study": name, **figures, "elapsed_s": round(time.perf_counter() - started, 2)}
+        figures = _table_study(spec, out, seed, echo, heading)
+    figures = {"study": name, "heading": heading, **figures, "elapsed_s": round(time.perf_counter() - started, 2)}
     if out is not None:
         (out / "study.json").write_text(json.dumps(figures, indent=2, default=_json_default) + "\n")
     return figures
@@ -252,18 +265,19 @@ def _clean(value):
     return value
 
 
-def _table_study(spec: StudySpec, out: Path | None, seed: int, echo) -> dict:
+def _table_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: str = "dF") -> dict:
     condition = spec.conditions[0]
     echo(f"study {spec.name}: {spec.title}")
     if spec.thesis_table:
         echo(f"thesis Table {spec.thesis_table}: {THESIS_CONDITIONS[spec.thesis_table][0]}")
-    echo(f"scenarios {', '.join(spec.scenarios)}; observers start {INITIAL_HEIGHT_ERROR:.0%} above the true height")
+    echo(f"scenarios {', '.join(spec.scenarios)}; observers start {INITIAL_HEIGHT_ERROR:.0%} above the true height; "
+         f"heading deviation {'from the measured d_F' if heading == 'dF' else 'known (noise-free d_F)'}")
     per_scenario = {obs: {} for obs in spec.observers}
     runs_traj1 = {}
     timing = {obs: [] for obs in spec.observers}
     case1 = None
     for k, scenario in enumerate(spec.scenarios):
-        case = simulate_case(scenario, condition, seed=seed + k)
+        case = simulate_case(scenario, condition, seed=seed + k, heading=heading)
         if k == 0:
             case1 = case
         for obs in spec.observers:
@@ -284,6 +298,9 @@ def _table_study(spec: StudySpec, out: Path | None, seed: int, echo) -> dict:
                                                          for s in spec.scenarios},
                         "step_us": 1e6 * float(np.median(timing[obs]))}
     flags = _print_table(spec, results, echo)
+    extra = {}
+    if condition.calibration_error_deg:
+        extra["calibration_axes"] = _calibration_axes(condition.calibration_error_deg, echo)
     plots = []
     if out is not None and case1 is not None:
         path = out / f"{spec.name}-error-vs-dx.png"
@@ -295,7 +312,30 @@ def _table_study(spec: StudySpec, out: Path | None, seed: int, echo) -> dict:
                               for k, v in r.items()} for o, r in results.items()},
             "thesis": {o: {m: thesis_value(spec.thesis_table, o, key) for m, key, _ in TABLE_METRICS}
                        for o in spec.observers},
-            "flags": flags, "plots": plots}
+            "flags": flags, "plots": plots, **extra}
+
+
+def _calibration_axes(error_deg: float, echo) -> dict:
+    """ccpi-hg-2p on thesis-1 with the calibration error on one mounting axis at a time."""
+    from visland.features import ideal_features
+    from visland.scenarios import resolve_scenario
+    from visland.sensors import camera_with_calibration_error
+    from visland.simulate import run_simulation
+    result = run_simulation(resolve_scenario("thesis-1"))
+    dh = -result.frames.p_runway_m[:, 2]
+    out = {}
+    echo(f"one axis at a time (ccpi-hg-2p, thesis-1, {error_deg:g} deg): dH - dH_hat at 400/200/100 ft")
+    for axis, vector in (("roll", (error_deg, 0, 0)), ("pitch", (0, error_deg, 0)), ("yaw", (0, 0, error_deg))):
+        camera_true = camera_with_calibration_error(result.options.camera, vector)
+        features = ideal_features(result.frames, result.scenario.runway, result.options.camera, camera_true=camera_true)
+        prepared = prepare_inputs(InertialSeries.from_imu(result.imu), FeatureSeries.from_ideal(features),
+                                  result.options.camera)
+        run = run_observer(make_observer("ccpi-hg-2p"), prepared, (1.0 + INITIAL_HEIGHT_ERROR) * dh[0])
+        m = run_metrics(run.t_s, dh, run.dh_m, start_t_s=run.start_t_s)
+        out[axis] = {k: _clean(m[k]) for k in ("err_400ft_m", "err_200ft_m", "err_100ft_m")}
+        echo(f"  {axis:5s} {_fmt(m['err_400ft_m'])} {_fmt(m['err_200ft_m'])} {_fmt(m['err_100ft_m'])}")
+    echo("")
+    return out
 
 
 def _print_table(spec: StudySpec, results: dict, echo) -> list:
@@ -319,7 +359,7 @@ def _print_table(spec: StudySpec, results: dict, echo) -> list:
     return flags
 
 
-def _std_along_study(spec: StudySpec, out: Path | None, seed: int, echo) -> dict:
+def _std_along_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: str = "dF") -> dict:
     echo(f"study {spec.name}: {spec.title} (thesis Table {spec.thesis_table})")
     echo("standard deviation of dH - dH_hat over the whole approach, from the observer's start (m)")
     header = f"{'observer':13s}" + "".join(f" | {c.label + ' ours [thesis]':>24s}" for c in spec.conditions)
@@ -329,7 +369,7 @@ def _std_along_study(spec: StudySpec, out: Path | None, seed: int, echo) -> dict
     flags = []
     plots = []
     for k, condition in enumerate(spec.conditions):
-        case = simulate_case(spec.scenarios[0], condition, seed=seed)
+        case = simulate_case(spec.scenarios[0], condition, seed=seed, heading=heading)
         runs = {}
         for obs in spec.observers:
             run, metrics = _run(obs, case, condition.params.get(obs))
@@ -359,7 +399,7 @@ def _std_along_study(spec: StudySpec, out: Path | None, seed: int, echo) -> dict
             "flags": flags, "plots": plots}
 
 
-def _ecc_study(spec: StudySpec, out: Path | None, seed: int, echo) -> dict:
+def _ecc_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: str = "dF") -> dict:
     condition = spec.conditions[0]
     echo(f"study {spec.name}: {spec.title}")
     echo("ECC'15 gives figures, not tables: our errors at the usual heights (dH - dH_hat, dY - dY_hat, m)")
@@ -371,7 +411,7 @@ def _ecc_study(spec: StudySpec, out: Path | None, seed: int, echo) -> dict:
     cases = []
     all_runs = []
     for k, scenario in enumerate(spec.scenarios):
-        case = simulate_case(scenario, condition, seed=seed + k)
+        case = simulate_case(scenario, condition, seed=seed + k, heading=heading)
         runs = {}
         for obs in spec.observers:
             run, metrics = _run(obs, case, condition.params.get(obs))

@@ -1,0 +1,103 @@
+"""Input preparation against the flown truth (positions, velocities, attitude of the simulation)."""
+import math
+
+import numpy as np
+import pytest
+
+from estimation_sims import prepared, simulation, true_virtual_points
+from visland.camera import CameraModel
+from visland.contracts import read_labels
+from visland.estimation.inputs import FeatureSeries, InertialSeries, prepare_inputs
+from visland.frames import R_camera_from_runway
+
+
+def test_ideal_inputs_match_the_geometry_of_the_flight():
+    result = simulation()
+    prep = prepared()
+    frames = prep.step_of_frame
+    ok = prep.points_ok
+    yv = np.array([prep.steps[j].points_yv if prep.steps[j].points_yv is not None else np.full((2, 2), np.nan)
+                   for j in frames])
+    assert np.nanmax(np.abs(yv[ok] - true_virtual_points(result)[ok])) < 1e-9
+    traj = result.trajectory
+    v_runway = np.array([s.v_runway_mps for s in prep.steps])
+    assert np.abs(v_runway - traj.v_runway_mps[:len(v_runway)]).max() < 1e-9
+    assert np.abs(prep.dpsi_rad - traj.dpsi_rad[:len(prep)]).max() < 1e-9
+    # the camera-frame quantities from the true attitude and mounting
+    k = 1000
+    R_cr = R_camera_from_runway(traj.roll_rad[k], traj.pitch_rad[k], traj.dpsi_rad[k],
+                                result.options.camera.mount_rpy_rad)
+    step = prep.steps[k]
+    assert np.allclose(step.n_camera, R_cr @ [0.0, 0.0, 1.0], atol=1e-12)
+    assert np.allclose(step.v_camera_mps, R_cr @ traj.v_runway_mps[k], atol=1e-9)
+    assert np.allclose(step.R_runway_from_camera, R_cr.T, atol=1e-12)
+    assert np.allclose(step.omega_camera_rps, result.options.camera.R_body_from_camera.T @ traj.omega_body_rps[k])
+
+
+def test_steps_are_the_inertial_samples_with_a_measurement_every_other_one():
+    prep = prepared()
+    assert np.allclose(np.diff(prep.t_s), 0.02)
+    measured = np.array([s.points_yv is not None for s in prep.steps])
+    assert measured[:20].tolist() == [True, False] * 10
+
+
+def test_frames_off_the_inertial_grid_get_their_own_step(tmp_path):
+    result = simulation()
+    features = FeatureSeries.from_ideal(result.features)
+    keep = slice(0, 200)
+    shifted = FeatureSeries(t_s=features.t_s[keep] + 0.007, near_uv_px=features.near_uv_px[keep],
+                            lines=features.lines[keep], center_line=features.center_line[keep],
+                            dF_px=features.dF_px[keep], points_ok=features.points_ok[keep],
+                            lines_ok=features.lines_ok[keep])
+    prep = prepare_inputs(InertialSeries.from_imu(result.imu), shifted, result.options.camera)
+    assert np.allclose(prep.t_s[prep.step_of_frame], shifted.t_s)
+    assert np.all(np.diff(prep.t_s) > 0)
+    # interpolated inertial data at an inserted step lies between its neighbours
+    j = prep.step_of_frame[10]
+    v = [prep.steps[i].v_runway_mps[0] for i in (j - 1, j, j + 1)]
+    assert min(v[0], v[2]) - 1e-9 <= v[1] <= max(v[0], v[2]) + 1e-9
+
+
+def test_rows_not_found_or_with_corners_outside_the_image_carry_no_points(tmp_path):
+    from visland.simulate import write_simulation
+    result = simulation()
+    out = tmp_path / "sim"
+    write_simulation(result, out)
+    labels = read_labels(out / "labels.csv")
+    labels["near_left_visible"][5] = 0.0
+    labels["near_right_u_px"][7] = math.nan
+    labels["found"] = np.ones(labels.n_rows)
+    labels["found"][9] = 0.0
+    features = FeatureSeries.from_table(labels)
+    assert not features.points_ok[[5, 7, 9]].any() and features.points_ok[[4, 6, 8]].all()
+    assert not features.lines_ok[9] and features.lines_ok[7]
+    assert features.reason[5] == "near corner outside the image" and features.reason[9] == "not found"
+    camera = CameraModel.load(out / "camera.json")
+    prep = prepare_inputs(InertialSeries.from_imu(result.imu), features, camera)
+    assert prep.steps[prep.step_of_frame[9]].lines is None
+    assert prep.steps[prep.step_of_frame[7]].points_yv is None
+
+
+def test_runway_heading_is_estimated_as_a_constant_from_noisy_d_F():
+    result = simulation("thesis-1", pixel_noise_px=1.0, seed=3)
+    prep = prepared("thesis-1", pixel_noise_px=1.0, seed=3)
+    truth = result.scenario.runway.heading_rad
+    per_frame = np.abs(prep.dpsi_frame_rad - result.frames.dpsi_rad)
+    running = np.abs(prep.psi_runway_rad[prep.step_of_frame] - truth)
+    late = slice(len(running) // 2, None)
+    # the running estimate is better than a single frame's d_F, and gets better with time
+    assert np.median(running[late]) < 0.5 * np.median(per_frame[late])
+    assert running[-1] < math.radians(0.02)
+
+
+def test_telemetry_not_covering_the_frames_is_an_error():
+    result = simulation()
+    inertial = InertialSeries.from_imu(result.imu)
+    features = FeatureSeries.from_ideal(result.features)
+    short = InertialSeries(inertial.t_s[:100], inertial.roll_rad[:100], inertial.pitch_rad[:100],
+                           inertial.heading_rad[:100], inertial.omega_body_rps[:100], inertial.v_ned_mps[:100])
+    with pytest.raises(ValueError, match="telemetry covers"):
+        prepare_inputs(short, features, result.options.camera)
+    with pytest.raises(ValueError, match="NaN"):
+        InertialSeries(inertial.t_s, inertial.roll_rad * math.nan, inertial.pitch_rad, inertial.heading_rad,
+                       inertial.omega_body_rps, inertial.v_ned_mps)
