@@ -1,0 +1,164 @@
+"""Scene parameters of the renderer: one frozen dataclass, validated, JSON/TOML round trip.
+
+Everything that changes how a frame looks lives here; the runway's size comes from the
+:class:`visland.runway.Runway` of the scenario, the camera from :class:`visland.camera.CameraModel`.
+The default is a clear day: sun high in the south-west, 30 km visibility, light sensor noise.
+"""
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+__all__ = ["SceneParams", "SURFACES", "STYLES"]
+
+SURFACES = ("asphalt", "concrete")
+#: ``realistic``: textured scene; ``flat``: flat colours for label checks (white runway,
+#: black ground and sky, no markings, no haze, no noise).
+STYLES = ("realistic", "flat")
+
+
+@dataclass(frozen=True)
+class SceneParams:
+    """How the airport scene looks and how the sensor degrades it.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of every procedural texture and of the sensor noise (frame noise is seeded by
+        ``seed`` and the frame index).
+    style : str
+        ``"realistic"`` or ``"flat"`` (see :data:`STYLES`).
+    surface : str
+        Runway pavement, ``"asphalt"`` or ``"concrete"``.
+    marking_wear : float
+        0 (fresh paint) to 1 (paint mostly gone in the touchdown zones).
+    rubber_deposits : float
+        0 to 1: darkness of the tyre marks in the touchdown zones.
+    sun_azimuth_deg : float
+        Direction of the sun from true north, degrees, in [0, 360).
+    sun_elevation_deg : float
+        Sun elevation above the horizon, degrees, in [5, 90].
+    visibility_m : float
+        Meteorological optical range (5 % contrast, Koschmieder), metres, in [300, 80000].
+    cloud_cover : float
+        0 (clear sky) to 1 (overcast look of the sky dome).
+    noise_std : float
+        Sensor noise, standard deviation in digital numbers of the 8-bit image, in [0, 30].
+    blur_sigma_px : float
+        Gaussian optical blur, pixels, in [0, 5] (0: none).
+    msaa_samples : int
+        Multisample anti-aliasing samples: 0, 2 or 4.
+    anisotropy : float
+        Anisotropic texture filtering ratio, 1 (off) to 16.
+    texel_m : float
+        Runway marking texture resolution, metres per texel, in [0.03, 0.5].
+    distractors : bool
+        Draw taxiways, apron, buildings and roads.
+    """
+
+    seed: int = 0
+    style: str = "realistic"
+    surface: str = "asphalt"
+    marking_wear: float = 0.25
+    rubber_deposits: float = 0.5
+    sun_azimuth_deg: float = 210.0
+    sun_elevation_deg: float = 45.0
+    visibility_m: float = 30000.0
+    cloud_cover: float = 0.3
+    noise_std: float = 1.5
+    blur_sigma_px: float = 0.0
+    msaa_samples: int = 4
+    anisotropy: float = 8.0
+    texel_m: float = 0.08
+    distractors: bool = True
+
+    def __post_init__(self):
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ValueError(f"scene seed must be a non-negative integer, got {self.seed!r}")
+        if self.style not in STYLES:
+            raise ValueError(f"scene style must be one of {', '.join(STYLES)}, got {self.style!r}")
+        if self.surface not in SURFACES:
+            raise ValueError(f"scene surface must be one of {', '.join(SURFACES)}, got {self.surface!r}")
+        ranges = (
+            ("marking_wear", 0.0, 1.0), ("rubber_deposits", 0.0, 1.0),
+            ("sun_azimuth_deg", 0.0, 360.0), ("sun_elevation_deg", 5.0, 90.0),
+            ("visibility_m", 300.0, 80000.0), ("cloud_cover", 0.0, 1.0),
+            ("noise_std", 0.0, 30.0), ("blur_sigma_px", 0.0, 5.0),
+            ("anisotropy", 1.0, 16.0), ("texel_m", 0.03, 0.5),
+        )
+        for name, low, high in ranges:
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"scene {name} must be a finite number, got {value!r}")
+            if not low <= value <= high:
+                raise ValueError(f"scene {name} must lie in [{low:g}, {high:g}], got {value:g}")
+            object.__setattr__(self, name, float(value))
+        if self.msaa_samples not in (0, 2, 4) or isinstance(self.msaa_samples, bool):
+            raise ValueError(f"scene msaa_samples must be 0, 2 or 4, got {self.msaa_samples!r}")
+        if not isinstance(self.distractors, bool):
+            raise ValueError(f"scene distractors must be true or false, got {self.distractors!r}")
+
+    # ----------------------------------------------------------------- presets
+    @classmethod
+    def flat(cls, **overrides) -> "SceneParams":
+        """Flat colours for label checks: white runway on black, no markings, haze or noise."""
+        base = dict(style="flat", noise_std=0.0, blur_sigma_px=0.0, distractors=False, cloud_cover=0.0)
+        base.update(overrides)
+        return cls(**base)
+
+    # ----------------------------------------------------------------- files
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict, source: str = "scene parameters") -> "SceneParams":
+        if not isinstance(data, dict):
+            raise ValueError(f"{source}: expected a table of scene parameters, got {type(data).__name__}")
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"{source}: unknown scene parameter '{unknown[0]}' (known: {', '.join(sorted(known))})")
+        try:
+            return cls(**data)
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"{source}: {error}") from None
+
+    def save(self, path) -> None:
+        """Write JSON (``.json``) or TOML (``.toml``)."""
+        path = Path(path)
+        if path.suffix == ".toml":
+            lines = []
+            for key, value in self.to_dict().items():
+                if isinstance(value, bool):
+                    lines.append(f"{key} = {'true' if value else 'false'}")
+                elif isinstance(value, str):
+                    lines.append(f'{key} = "{value}"')
+                else:
+                    lines.append(f"{key} = {value!r}")
+            path.write_text("\n".join(lines) + "\n")
+        else:
+            path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+
+    @classmethod
+    def load(cls, path) -> "SceneParams":
+        """Read a JSON or TOML file of scene parameters (a ``[scene]`` table is accepted in TOML)."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except FileNotFoundError:
+            raise ValueError(f"{path}: scene parameter file not found") from None
+        if path.suffix == ".toml":
+            try:
+                data = tomllib.loads(text)
+            except tomllib.TOMLDecodeError as error:
+                raise ValueError(f"{path}: not valid TOML ({error})") from None
+            data = data.get("scene", data)
+        else:
+            try:
+                data = json.loads(text)
+            except json.JSONDecodeError as error:
+                raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
+        return cls.from_dict(data, source=str(path))

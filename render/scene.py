@@ -1,0 +1,307 @@
+"""The airport scene: trimesh geometry in the runway frame, turned into a pyrender Scene.
+
+Layout (runway frame R, metres; W, L the runway's width and length):
+
+- the runway ``[0, L] x [-W/2, W/2]``, cut in tiles about 50 m long, each with its own
+  texture holding the painted markings (:mod:`visland.render.markings`);
+- a parallel taxiway on the right at ``4 W + 2.5`` m from the centre line (182.5 m for a 45 m
+  runway, ICAO code E) joined to the runway by three connectors (none near the threshold, so
+  the threshold corners stay clean), an apron and buildings beyond it;
+- two roads (one parallel on the left, one crossing 1.4 km before the threshold);
+- fields and woods around mown airport grass out to 60 km; a sky dome that follows the camera.
+
+Depth precision: every ground surface lies in the plane z = 0 and **no two surfaces overlap**.
+The ground is one tensor grid whose lines pass through every edge of every paved area; each
+cell belongs to exactly one surface and neighbouring cells share their vertices, so there is
+nothing to z-fight and no crack at any distance. Markings are painted into the runway
+textures, not stacked as geometry. Only buildings and the sky use depth, far apart.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from visland.runway import Runway
+
+from .markings import runway_markings
+from .params import SceneParams
+from . import textures
+
+__all__ = ["AirportLayout", "airport_layout", "build_scene", "SceneHandles", "GROUND_EXTENT_M", "SKY_RADIUS_M"]
+
+GROUND_EXTENT_M = 60000.0
+SKY_RADIUS_M = 120000.0
+RUNWAY_TILE_M = 50.0
+_CLAMP = 33071       # GL_CLAMP_TO_EDGE
+_REPEAT = 10497      # GL_REPEAT
+
+
+@dataclass(frozen=True)
+class Region:
+    """An axis-aligned paved area: ``rect = (x0, x1, y0, y1)``; strips repeat a texture along ``axis``."""
+
+    name: str
+    rect: tuple
+    material: str
+    priority: int
+    axis: str = "x"           # direction along which a strip texture runs
+    width_m: float = 0.0      # strip width (across the axis)
+
+
+@dataclass(frozen=True)
+class AirportLayout:
+    """Paved regions (highest priority wins a grid cell) and buildings ``(x0, x1, y0, y1, height, rgb)``."""
+
+    regions: tuple
+    buildings: tuple
+    grass_rect: tuple
+    runway_tile_edges_m: np.ndarray
+
+
+def airport_layout(runway: Runway, distractors: bool = True) -> AirportLayout:
+    """Where everything is, in the runway frame (see module docstring)."""
+    L, W = runway.length_m, runway.width_m
+    n_tiles = max(1, int(math.ceil(L / RUNWAY_TILE_M)))
+    tile_edges = np.linspace(0.0, L, n_tiles + 1)
+    regions = [Region("runway", (0.0, L, -W / 2, W / 2), "runway", 100)]
+    buildings = []
+    if distractors:
+        sep = 4.0 * W + 2.5
+        tw = min(23.0, 0.5 * W + 0.5)
+        t_in, t_out = sep - tw / 2, sep + tw / 2
+        regions.append(Region("parallel_taxiway", (60.0, L - 40.0, t_in, t_out), "taxiway", 50, "x", tw))
+        for k, x_c in enumerate((0.28 * L, 0.52 * L, L - 60.0)):
+            regions.append(Region(f"connector_{k}", (x_c - tw / 2, x_c + tw / 2, W / 2, t_in), "taxiway", 40, "y", tw))
+        a_x0, a_x1 = 0.36 * L, 0.60 * L
+        a_y0, a_y1 = t_out + 45.0, t_out + 245.0
+        regions.append(Region("apron_link", (0.48 * L - tw / 2, 0.48 * L + tw / 2, t_out, a_y0), "taxiway", 40, "y", tw))
+        regions.append(Region("apron", (a_x0, a_x1, a_y0, a_y1), "apron", 30))
+        road_w = 8.0
+        regions.append(Region("road_parallel", (-GROUND_EXTENT_M, GROUND_EXTENT_M, -650.0 - road_w / 2,
+                                                -650.0 + road_w / 2), "road", 20, "x", road_w))
+        regions.append(Region("road_crossing", (-1400.0 - road_w / 2, -1400.0 + road_w / 2, -GROUND_EXTENT_M,
+                                                GROUND_EXTENT_M), "road", 10, "y", road_w))
+        # terminal, hangars, tower, cargo sheds beyond the apron; farms along the road
+        terminal_y = a_y1 + 20.0
+        buildings += [
+            (a_x0 + 30.0, a_x0 + 0.55 * (a_x1 - a_x0), terminal_y, terminal_y + 45.0, 16.0, (0.78, 0.78, 0.76)),
+            (a_x0 + 0.62 * (a_x1 - a_x0), a_x0 + 0.62 * (a_x1 - a_x0) + 85.0, terminal_y, terminal_y + 70.0, 22.0,
+             (0.70, 0.74, 0.78)),
+            (a_x1 - 70.0, a_x1, terminal_y, terminal_y + 60.0, 20.0, (0.86, 0.86, 0.84)),
+            (a_x0 - 60.0, a_x0 - 48.0, a_y0 + 20.0, a_y0 + 32.0, 38.0, (0.82, 0.80, 0.76)),
+            (a_x1 + 60.0, a_x1 + 150.0, a_y0, a_y0 + 40.0, 11.0, (0.60, 0.42, 0.36)),
+        ]
+        for x_farm, y_farm in ((-2600.0, -720.0), (-900.0, -700.0), (900.0, -710.0), (-3300.0, 900.0),
+                               (L + 1500.0, -720.0)):
+            buildings.append((x_farm, x_farm + 30.0, y_farm - 14.0, y_farm, 8.0, (0.64, 0.44, 0.36)))
+            buildings.append((x_farm + 40.0, x_farm + 75.0, y_farm - 20.0, y_farm - 2.0, 7.0, (0.72, 0.72, 0.70)))
+        grass_rect = (-450.0, L + 450.0, -330.0, a_y1 + 140.0)
+    else:
+        grass_rect = (-450.0, L + 450.0, -330.0, 330.0)
+    return AirportLayout(tuple(regions), tuple(buildings), grass_rect, tile_edges)
+
+
+@dataclass
+class SceneHandles:
+    """The pyrender scene and the node that must follow the camera."""
+
+    scene: object
+    sky_node: object
+    max_structure_height_m: float
+
+
+def _texture(image_t_rows, wrap: int):
+    """A pyrender Texture from an image whose row index grows with t (flipped back for pyrender)."""
+    import pyrender
+    sampler = pyrender.Sampler(wrapS=wrap, wrapT=wrap)
+    return pyrender.Texture(source=np.ascontiguousarray(np.flipud(image_t_rows)), source_channels="RGB",
+                            sampler=sampler)
+
+
+def _material(base_texture=None, detail_texture=None, detail_per_m=0.0, detail_strength=0.0, kind=0,
+              colour=(1.0, 1.0, 1.0)):
+    import pyrender
+    return pyrender.MetallicRoughnessMaterial(
+        baseColorFactor=(*colour, 1.0), baseColorTexture=base_texture, emissiveTexture=detail_texture,
+        emissiveFactor=(detail_per_m, detail_strength, float(kind)), metallicFactor=0.0, roughnessFactor=1.0,
+        doubleSided=True)
+
+
+def _grid_edges(layout: AirportLayout) -> tuple[np.ndarray, np.ndarray]:
+    xs = {-GROUND_EXTENT_M, GROUND_EXTENT_M}
+    ys = {-GROUND_EXTENT_M, GROUND_EXTENT_M}
+    for region in layout.regions:
+        x0, x1, y0, y1 = region.rect
+        xs |= {x0, x1}
+        ys |= {y0, y1}
+    xs |= set(layout.runway_tile_edges_m.tolist())
+    # a ring of breakpoints keeps the large ground triangles moderate near the airport
+    for r in (1000.0, 2500.0, 5000.0, 10000.0, 20000.0, 40000.0):
+        xs |= {-r, layout.runway_tile_edges_m[-1] + r}
+        ys |= {-r, r}
+    xs = np.array(sorted(v for v in xs if -GROUND_EXTENT_M <= v <= GROUND_EXTENT_M))
+    ys = np.array(sorted(v for v in ys if -GROUND_EXTENT_M <= v <= GROUND_EXTENT_M))
+    return xs, ys
+
+
+def _cell_owners(layout: AirportLayout, xs, ys) -> np.ndarray:
+    """Index of the region owning each grid cell (-1: ground), shape (len(ys)-1, len(xs)-1)."""
+    xc = 0.5 * (xs[:-1] + xs[1:])
+    yc = 0.5 * (ys[:-1] + ys[1:])
+    owner = np.full((len(yc), len(xc)), -1)
+    best = np.full(owner.shape, -np.inf)
+    for k, region in enumerate(layout.regions):
+        x0, x1, y0, y1 = region.rect
+        inside = ((yc[:, None] > y0) & (yc[:, None] < y1)) & ((xc[None, :] > x0) & (xc[None, :] < x1))
+        take = inside & (region.priority > best)
+        owner[take] = k
+        best[take] = region.priority
+    return owner
+
+
+def _quads_mesh(cells, uv_of):
+    """trimesh of axis-aligned cells ``(x0, x1, y0, y1)`` at z = 0 with UVs ``uv_of(x, y) -> (s, t)``."""
+    import trimesh
+    cells = np.asarray(cells, dtype=float).reshape(-1, 4)
+    x0, x1, y0, y1 = cells.T
+    vx = np.stack([x0, x1, x1, x0], axis=1).ravel()
+    vy = np.stack([y0, y0, y1, y1], axis=1).ravel()
+    vertices = np.stack([vx, vy, np.zeros_like(vx)], axis=1)
+    base = np.arange(len(cells))[:, None] * 4
+    # counter-clockwise seen from above (from -z): normal points up (-z)
+    faces = np.concatenate([base + np.array([0, 2, 1]), base + np.array([0, 3, 2])], axis=0)
+    visual = None
+    if uv_of is not None:
+        visual = trimesh.visual.TextureVisuals(uv=np.stack(uv_of(vx, vy), axis=1))
+    return trimesh.Trimesh(vertices=vertices, faces=faces, visual=visual, process=False)
+
+
+def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
+    """Build the airport scene of ``runway`` as a pyrender Scene in the runway frame.
+
+    Textures are generated from ``params.seed`` (same seed, same scene, in every process).
+    """
+    import pyrender
+    import trimesh
+
+    flat = params.style == "flat"
+    rng = np.random.default_rng(params.seed)
+    layout = airport_layout(runway, distractors=params.distractors and not flat)
+    marking_layout = runway_markings(runway)
+    scene = pyrender.Scene(bg_color=(0.0, 0.0, 0.0, 1.0), ambient_light=(0.0, 0.0, 0.0))
+
+    xs, ys = _grid_edges(layout)
+    owner = _cell_owners(layout, xs, ys)
+    rows, cols = np.nonzero(np.ones_like(owner, dtype=bool))
+    all_cells = np.stack([xs[cols], xs[cols + 1], ys[rows], ys[rows + 1]], axis=1)
+    owners = owner[rows, cols]
+
+    # ------------------------------------------------------------ ground (fields and grass)
+    ground_cells = all_cells[owners == -1]
+    if flat:
+        ground_material = _material(kind=3, colour=(0.0, 0.0, 0.0))
+        scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, None), material=ground_material))
+    else:
+        extent = 12800.0
+        centre = (runway.length_m / 2.0, 0.0)
+        fields = textures.fields_texture(np.random.default_rng([params.seed, 1]), 2048, extent, centre,
+                                         layout.grass_rect)
+        grass = textures.grass_detail(np.random.default_rng([params.seed, 2]), 1024)
+
+        def ground_uv(x, y):
+            return (x - (centre[0] - extent / 2)) / extent, (y - (centre[1] - extent / 2)) / extent
+
+        ground_material = _material(_texture(fields, _REPEAT), _texture(grass, _REPEAT), 1.0 / 16.0, 0.9)
+        scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, ground_uv), material=ground_material))
+
+    # ------------------------------------------------------------ runway tiles
+    runway_index = [k for k, r in enumerate(layout.regions) if r.material == "runway"][0]
+    runway_cells = all_cells[owners == runway_index]
+    fields_rw = None if flat else textures.RunwayFields(runway, marking_layout, np.random.default_rng([params.seed, 3]))
+    detail_pavement = None
+    if not flat:
+        joints = 0
+        detail_pavement = _texture(textures.pavement_detail(np.random.default_rng([params.seed, 4]), 512, joints),
+                                   _REPEAT)
+    edges = layout.runway_tile_edges_m
+    centres_x = 0.5 * (runway_cells[:, 0] + runway_cells[:, 1])
+    tile_of_cell = np.clip(np.searchsorted(edges, centres_x) - 1, 0, len(edges) - 2)
+    W = runway.width_m
+    for tile in range(len(edges) - 1):
+        cells = runway_cells[tile_of_cell == tile]
+        if not len(cells):
+            continue
+        x0, x1 = edges[tile], edges[tile + 1]
+        image = textures.runway_tile(x0, x1, runway, marking_layout, fields_rw, params.surface, params.marking_wear,
+                                     params.rubber_deposits, params.texel_m,
+                                     np.random.default_rng([params.seed, 5, tile]), flat=flat)
+
+        def tile_uv(x, y, x0=x0, x1=x1):
+            return (x - x0) / (x1 - x0), (y + W / 2) / W
+
+        if flat:
+            material = _material(kind=3, colour=(1.0, 1.0, 1.0))
+            scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
+        else:
+            material = _material(_texture(image, _CLAMP), detail_pavement, 1.0 / 8.0, 0.8)
+            scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(cells, tile_uv), material=material))
+
+    # ------------------------------------------------------------ strips and apron
+    strip_textures = {}
+    for material_name in ("taxiway", "road", "apron"):
+        idx = [k for k, r in enumerate(layout.regions) if r.material == material_name]
+        if not idx:
+            continue
+        mask = np.isin(owners, idx)
+        cells = all_cells[mask]
+        cell_regions = [layout.regions[k] for k in owners[mask]]
+        if material_name == "apron":
+            apron_detail = textures.pavement_detail(np.random.default_rng([params.seed, 6]), 512, joints_every_px=85)
+            colour = np.array(textures.SURFACE_COLOURS["apron_concrete"]) / 255.0
+            material = _material(None, _texture(apron_detail, _REPEAT), 1.0 / 30.0, 0.9, colour=tuple(colour))
+            scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
+            continue
+        period = 12.0
+        width = cell_regions[0].width_m
+        if material_name not in strip_textures:
+            strip_textures[material_name] = textures.strip_texture(
+                material_name, width, np.random.default_rng([params.seed, 7, len(strip_textures)]), 0.08, period)
+        # per-cell UVs: along the strip axis s = position / period, across t from one edge to the other
+        meshes = []
+        for cell, region in zip(cells, cell_regions):
+            rx0, rx1, ry0, ry1 = region.rect
+            if region.axis == "x":
+                def uv(x, y, ry0=ry0, ry1=ry1):
+                    return x / period, (y - ry0) / (ry1 - ry0)
+            else:
+                def uv(x, y, rx0=rx0, rx1=rx1):
+                    return y / period, (x - rx0) / (rx1 - rx0)
+            meshes.append(_quads_mesh(cell[None, :], uv))
+        mesh = trimesh.util.concatenate(meshes)
+        material = _material(_texture(strip_textures[material_name], _REPEAT), detail_pavement, 1.0 / 8.0, 0.6)
+        scene.add(pyrender.Mesh.from_trimesh(mesh, material=material))
+
+    # ------------------------------------------------------------ buildings
+    max_height = 0.0
+    if layout.buildings:
+        boxes = []
+        for x0, x1, y0, y1, height, rgb in layout.buildings:
+            box = trimesh.creation.box(extents=(x1 - x0, y1 - y0, height))
+            box.apply_translation(((x0 + x1) / 2, (y0 + y1) / 2, -height / 2))
+            box.visual.face_colors = np.array([*rgb, 1.0]) * 255
+            boxes.append(box)
+            max_height = max(max_height, height)
+        mesh = trimesh.util.concatenate(boxes)
+        scene.add(pyrender.Mesh.from_trimesh(mesh, material=_material(kind=2), smooth=False))
+
+    # ------------------------------------------------------------ sky dome (follows the camera)
+    dome = trimesh.creation.icosphere(subdivisions=3, radius=SKY_RADIUS_M)
+    if flat:
+        sky_material = _material(kind=3, colour=(0.0, 0.0, 0.0))
+    else:
+        clouds = textures.cloud_texture(np.random.default_rng([params.seed, 8]), 512)
+        sky_material = _material(_texture(clouds, _REPEAT), kind=1)
+    sky_node = scene.add(pyrender.Mesh.from_trimesh(dome, material=sky_material))
+    return SceneHandles(scene=scene, sky_node=sky_node, max_structure_height_m=max_height)

@@ -1,0 +1,325 @@
+"""Procedural textures, generated from a seed (no asset downloads).
+
+Every function is pure: ``(parameters, numpy Generator) -> uint8 image``. Images are returned
+with **row index increasing with the texture coordinate t** (OpenGL order); the scene module
+hands them to pyrender, which flips rows on upload, after flipping them back.
+
+Two kinds of texture:
+
+- *macro* colour textures mapped by each mesh's UVs (fields around the airport, runway tiles
+  with their markings, taxiway and road strips);
+- *detail* textures, tileable, neutral grey on average (128), multiplied in the shader at a
+  fixed size in metres (grass blades, asphalt grain, concrete). They add the fine grain that
+  the macro textures cannot hold, and fade to neutral with mipmapping at distance.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from visland.runway import Runway
+
+from .markings import MarkingLayout
+
+__all__ = [
+    "tileable_noise", "grass_detail", "pavement_detail", "cloud_texture", "fields_texture",
+    "runway_tile", "strip_texture", "coverage_of_rectangles", "SURFACE_COLOURS",
+]
+
+#: Base colours (sRGB 0-255) of the pavements and paints.
+SURFACE_COLOURS = {
+    "asphalt": (84.0, 84.0, 86.0),
+    "concrete": (168.0, 165.0, 158.0),
+    "taxiway_asphalt": (92.0, 91.0, 90.0),
+    "apron_concrete": (160.0, 157.0, 150.0),
+    "road_asphalt": (78.0, 78.0, 80.0),
+    "paint_white": (236.0, 236.0, 232.0),
+    "paint_yellow": (222.0, 184.0, 40.0),
+    "rubber": (28.0, 28.0, 30.0),
+}
+
+
+def tileable_noise(shape, rng: np.random.Generator, beta: float = 2.0, cutoff: float = 0.0) -> np.ndarray:
+    """Periodic fractal noise of zero mean and unit standard deviation.
+
+    White noise filtered in the Fourier domain by ``1 / f^(beta/2)`` (power spectrum
+    ``1/f^beta``); periodic, so it tiles without seams.
+
+    Parameters
+    ----------
+    shape : (rows, cols)
+    beta : spectral slope (0 white, 2 brownian-like, larger smoother).
+    cutoff : frequencies below this (cycles per image) are removed.
+    """
+    rows, cols = shape
+    white = rng.standard_normal((rows, cols))
+    fy = np.fft.fftfreq(rows)[:, None] * rows
+    fx = np.fft.rfftfreq(cols)[None, :] * cols
+    f = np.hypot(fx, fy)
+    f[0, 0] = 1.0
+    gain = f ** (-beta / 2.0)
+    gain[f < max(cutoff, 1e-9)] = 0.0
+    gain[0, 0] = 0.0
+    field = np.fft.irfft2(np.fft.rfft2(white) * gain, s=(rows, cols))
+    std = field.std()
+    return field / std if std > 0 else field
+
+
+def _to_uint8(image) -> np.ndarray:
+    return np.clip(np.rint(image), 0, 255).astype(np.uint8)
+
+
+def grass_detail(rng: np.random.Generator, size: int = 1024) -> np.ndarray:
+    """Tileable grass detail (neutral grey mean 128 with a slight green/yellow play), (size, size, 3)."""
+    coarse = tileable_noise((size, size), rng, beta=2.6)
+    fine = tileable_noise((size, size), rng, beta=0.6)
+    blades = tileable_noise((size, size), rng, beta=1.2, cutoff=size / 8)
+    lum = 1.0 + 0.10 * coarse + 0.10 * fine + 0.08 * blades
+    hue = 0.05 * tileable_noise((size, size), rng, beta=2.2)
+    out = np.stack([lum * (1.0 + hue), lum, lum * (1.0 - 0.5 * hue)], axis=-1) * 128.0
+    return _to_uint8(out)
+
+
+def pavement_detail(rng: np.random.Generator, size: int = 512, joints_every_px: int = 0) -> np.ndarray:
+    """Tileable pavement grain, neutral grey mean ~128, (size, size, 3).
+
+    ``joints_every_px > 0`` draws darker slab joints (concrete) every that many texels.
+    """
+    grain = tileable_noise((size, size), rng, beta=0.3)
+    mottle = tileable_noise((size, size), rng, beta=2.8)
+    lum = 1.0 + 0.07 * grain + 0.06 * mottle
+    # sparse light aggregate stones
+    stones = rng.random((size, size)) < 0.01
+    lum = lum + 0.18 * stones
+    if joints_every_px:
+        idx = np.arange(size)
+        joint = (idx % joints_every_px) == 0
+        lum[joint, :] *= 0.72
+        lum[:, joint] *= 0.72
+    lum = lum / lum.mean()
+    return _to_uint8(np.repeat((lum * 128.0)[..., None], 3, axis=-1))
+
+
+def cloud_texture(rng: np.random.Generator, size: int = 512) -> np.ndarray:
+    """Tileable cloud density in [0, 255] (single channel replicated to RGB), (size, size, 3)."""
+    density = tileable_noise((size, size), rng, beta=3.0) + 0.35 * tileable_noise((size, size), rng, beta=1.8)
+    density = (density - density.min()) / (density.max() - density.min())
+    return _to_uint8(np.repeat((density * 255.0)[..., None], 3, axis=-1))
+
+
+# --------------------------------------------------------------------------- fields
+_FIELD_PALETTE = np.array([
+    (92, 122, 52), (112, 138, 58), (136, 146, 74), (168, 152, 96), (186, 166, 104),
+    (122, 100, 72), (104, 86, 64), (78, 104, 46), (146, 140, 88), (98, 128, 70),
+], dtype=float)
+
+
+def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_xy_m, airport_rect_m,
+                   angle_deg: float = 17.0) -> np.ndarray:
+    """Patchwork of fields, woods and hedges around an airport of mown grass, (size, size, 3).
+
+    Parameters
+    ----------
+    size : texels per side.
+    extent_m : metres covered per side; texel (row, col) centre is at
+        ``x = x_c - extent/2 + (col + 0.5) extent/size``, ``y = y_c - extent/2 + (row + 0.5) extent/size``.
+    centre_xy_m : (x_c, y_c) runway-frame centre of the texture.
+    airport_rect_m : (x0, x1, y0, y1) area of mown grass around the runway.
+    angle_deg : direction of the field pattern relative to the runway.
+    """
+    texel = extent_m / size
+    coords = (np.arange(size) + 0.5) * texel - extent_m / 2.0
+    x = centre_xy_m[0] + coords[None, :]
+    y = centre_xy_m[1] + coords[:, None]
+    a = math.radians(angle_deg)
+    # field grid coordinates: rotated, offset so the pattern does not align with the runway
+    u = (x * math.cos(a) + y * math.sin(a)) + 5.0 * extent_m
+    v = (-x * math.sin(a) + y * math.cos(a)) + 5.0 * extent_m
+    n_strips = int(11 * extent_m / 150.0) + 2
+    widths = rng.uniform(120.0, 420.0, n_strips)
+    strip_edges = np.concatenate([[0.0], np.cumsum(widths)])
+    strip = np.clip(np.searchsorted(strip_edges, u) - 1, 0, n_strips - 1)
+    n_fields = int(11 * extent_m / 180.0) + 2
+    lengths = rng.uniform(160.0, 650.0, (n_strips, n_fields))
+    field_edges = np.concatenate([np.zeros((n_strips, 1)), np.cumsum(lengths, axis=1)], axis=1)
+    offsets = rng.uniform(0.0, 400.0, n_strips)
+    vv = v + offsets[strip]
+    # per-strip searchsorted, vectorised through a flat index
+    flat_edges = (field_edges + (np.arange(n_strips) * 1e7)[:, None]).ravel()
+    field = np.searchsorted(flat_edges, vv + strip * 1e7) - 1 - strip * (n_fields + 1)
+    field = np.clip(field, 0, n_fields - 1)
+    field_id = strip * n_fields + field
+    n_ids = n_strips * n_fields
+    colour_index = rng.integers(0, len(_FIELD_PALETTE), n_ids)
+    brightness = rng.uniform(0.9, 1.08, n_ids)
+    kind = rng.random(n_ids)                       # < 0.1 woods, < 0.13 built-up
+    image = _FIELD_PALETTE[colour_index[field_id]] * brightness[field_id][..., None]
+    # within-field texture: furrows along the strip direction and large-scale soil variation
+    furrow = np.sin(u * 2 * math.pi / 18.0 + rng.uniform(0, 6.3)) * 0.035
+    soil = tileable_noise((size, size), rng, beta=2.4) * 0.06
+    image *= (1.0 + furrow + soil)[..., None]
+    woods = kind[field_id] < 0.10
+    blotch = tileable_noise((size, size), rng, beta=1.4)
+    wood_colour = np.array([46.0, 66.0, 34.0])[None, None, :] * (1.0 + 0.18 * blotch)[..., None]
+    image = np.where(woods[..., None], wood_colour, image)
+    built = (kind[field_id] >= 0.10) & (kind[field_id] < 0.13)
+    speck = rng.random((size, size))
+    roofs = np.where(speck[..., None] < 0.35, np.array([150.0, 92.0, 76.0]), np.array([128.0, 126.0, 118.0]))
+    image = np.where(built[..., None], roofs * (0.85 + 0.3 * speck[..., None]), image)
+    # hedges and tracks on field boundaries
+    du = np.abs(u - strip_edges[strip])
+    dv = np.abs(vv - field_edges[strip, field])
+    hedge = (np.minimum(du, dv) < 0.8 * texel) & (rng.random((size, size)) < 0.7)
+    image = np.where(hedge[..., None], np.array([58.0, 76.0, 40.0]), image)
+    # mown airport grass
+    x0, x1, y0, y1 = airport_rect_m
+    inside = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
+    grass = np.array([104.0, 138.0, 66.0])[None, None, :] * (1.0 + 0.05 * soil[..., None] / 0.06)
+    mowing = (np.floor((y - y0) / 12.0) % 2) * 0.035
+    grass = grass * (1.0 + mowing)[..., None]
+    image = np.where(inside[..., None], grass, image)
+    return _to_uint8(image)
+
+
+# --------------------------------------------------------------------------- runway tiles
+def coverage_of_rectangles(rects_m, x_edges_m, y_edges_m) -> np.ndarray:
+    """Exact area fraction of each texel covered by the union-free sum of axis-aligned rectangles.
+
+    Parameters
+    ----------
+    rects_m : (n, 4) ``x0, x1, y0, y1``.
+    x_edges_m : (cols + 1,) texel edges along x; y_edges_m : (rows + 1,) along y.
+
+    Returns
+    -------
+    coverage : (rows, cols) float in [0, 1] (overlapping rectangles are clipped to 1).
+    """
+    x_lo, x_hi = x_edges_m[:-1], x_edges_m[1:]
+    y_lo, y_hi = y_edges_m[:-1], y_edges_m[1:]
+    out = np.zeros((len(y_lo), len(x_lo)))
+    for x0, x1, y0, y1 in np.asarray(rects_m, dtype=float).reshape(-1, 4):
+        if x1 <= x_edges_m[0] or x0 >= x_edges_m[-1] or y1 <= y_edges_m[0] or y0 >= y_edges_m[-1]:
+            continue
+        cx = np.clip(np.minimum(x1, x_hi) - np.maximum(x0, x_lo), 0.0, None) / (x_hi - x_lo)
+        cy = np.clip(np.minimum(y1, y_hi) - np.maximum(y0, y_lo), 0.0, None) / (y_hi - y_lo)
+        ix = np.nonzero(cx)[0]
+        iy = np.nonzero(cy)[0]
+        out[iy[0]:iy[-1] + 1, ix[0]:ix[-1] + 1] += np.outer(cy[iy[0]:iy[-1] + 1], cx[ix[0]:ix[-1] + 1])
+    return np.minimum(out, 1.0)
+
+
+class RunwayFields:
+    """Low-frequency fields over the whole runway (stains, rubber, wear), sampled seamlessly per tile."""
+
+    def __init__(self, runway: Runway, layout: MarkingLayout, rng: np.random.Generator):
+        from scipy.ndimage import map_coordinates
+        self._map = map_coordinates
+        self.runway = runway
+        self.step_x = 1.0
+        self.step_y = 0.25
+        nx = int(math.ceil(runway.length_m / self.step_x)) + 3
+        ny = int(math.ceil(runway.width_m / self.step_y)) + 3
+        self.stain = _smooth_noise((ny, nx), rng, beta=2.2)
+        self.wear = _smooth_noise((ny, nx), rng, beta=1.6)
+        # rubber: streaks along x (fine across, coarse along) in the touchdown zones of both ends
+        across = _smooth_noise((ny, 1), rng, beta=0.8)
+        along = _smooth_noise((1, nx), rng, beta=1.8)
+        streaks = np.clip(0.55 + 0.45 * across, 0, None) * np.clip(0.7 + 0.3 * along, 0, None)
+        x = (np.arange(nx) - 1) * self.step_x
+        y = (np.arange(ny) - 1) * self.step_y - runway.width_m / 2.0
+        zone_end = max(layout.touchdown_zone_end_m, layout.aiming_point_start_m + 200.0)
+
+        def envelope_x(d):
+            return np.clip((d - 60.0) / 120.0, 0, 1) * np.clip((zone_end + 250.0 - d) / 300.0, 0, 1)
+
+        ex = np.maximum(envelope_x(x), envelope_x(runway.length_m - x))
+        # main gear tracks: a band of +-(2..8) m about the centre line
+        ey = np.exp(-0.5 * ((np.abs(y) - 4.0) / 2.6) ** 2) + 0.6 * np.exp(-0.5 * (y / 1.5) ** 2)
+        self.rubber = streaks * ey[:, None] * ex[None, :]
+
+    def sample(self, field: np.ndarray, x_m, y_m) -> np.ndarray:
+        cols = x_m / self.step_x + 1.0
+        rows = (y_m + self.runway.width_m / 2.0) / self.step_y + 1.0
+        rr, cc = np.meshgrid(rows, cols, indexing="ij")
+        return self._map(field, [rr, cc], order=1, mode="nearest")
+
+
+def _smooth_noise(shape, rng, beta):
+    rows, cols = shape
+    pad_r = max(rows, 8)
+    pad_c = max(cols, 8)
+    field = tileable_noise((pad_r, pad_c), rng, beta=beta)
+    return field[:rows, :cols]
+
+
+def runway_tile(x0_m: float, x1_m: float, runway: Runway, layout: MarkingLayout, fields: RunwayFields,
+                surface: str, wear: float, rubber: float, texel_m: float, rng: np.random.Generator,
+                flat: bool = False) -> np.ndarray:
+    """The runway between ``x0_m`` and ``x1_m``, full width, with its markings, (rows, cols, 3).
+
+    Columns run along x from ``x0_m`` (texel edges evenly spaced), rows along y from the left
+    edge ``-W/2`` (row index increases with y and with the texture coordinate t).
+    ``flat`` gives plain white pavement and no markings (label checks).
+    """
+    W = runway.width_m
+    cols = max(2, int(math.ceil((x1_m - x0_m) / texel_m)))
+    rows = max(2, int(math.ceil(W / texel_m)))
+    if flat:
+        return np.full((rows, cols, 3), 255, dtype=np.uint8)
+    x_edges = np.linspace(x0_m, x1_m, cols + 1)
+    y_edges = np.linspace(-W / 2.0, W / 2.0, rows + 1)
+    xc = 0.5 * (x_edges[:-1] + x_edges[1:])
+    yc = 0.5 * (y_edges[:-1] + y_edges[1:])
+    base = np.array(SURFACE_COLOURS[surface])
+    stain = fields.sample(fields.stain, xc, yc)
+    grain = rng.standard_normal((rows, cols)) * 0.025
+    colour = base[None, None, :] * (1.0 + 0.07 * stain + grain)[..., None]
+    if surface == "concrete":
+        # slab joints every 7.5 m across and along (darker lines one texel wide)
+        jx = np.abs(((xc + 3.75) % 7.5) - 3.75) < texel_m / 2
+        jy = np.abs(((yc + 3.75) % 7.5) - 3.75) < texel_m / 2
+        colour[:, jx] *= 0.8
+        colour[jy, :] *= 0.8
+    paint = coverage_of_rectangles(layout.rectangles_m, x_edges, y_edges)
+    if paint.any():
+        wear_field = fields.sample(fields.wear, xc, yc)
+        rubber_field = fields.sample(fields.rubber, xc, yc)
+        worn = np.clip(wear * (0.55 + 0.45 * wear_field) + wear * 0.8 * rubber_field
+                       + 0.15 * wear * rng.standard_normal((rows, cols)), 0.0, 0.95)
+        alpha = paint * (1.0 - worn)
+        colour = colour * (1 - alpha[..., None]) + np.array(SURFACE_COLOURS["paint_white"]) * alpha[..., None]
+    if rubber > 0:
+        r = np.clip(fields.sample(fields.rubber, xc, yc) * rubber * 0.85, 0, 0.9)
+        colour = colour * (1 - r[..., None]) + np.array(SURFACE_COLOURS["rubber"]) * r[..., None]
+    return _to_uint8(colour)
+
+
+def strip_texture(kind: str, width_m: float, rng: np.random.Generator, texel_m: float = 0.08,
+                  period_m: float = 12.0, flat: bool = False) -> np.ndarray:
+    """One period of a taxiway or road strip, (rows across the width, cols along the length, 3).
+
+    ``kind``: ``"taxiway"`` (asphalt, yellow centre line 0.15 m) or ``"road"`` (asphalt, white
+    edge lines and a 3 m / 9 m dashed centre line). Rows span the width from one edge to the
+    other, columns one ``period_m`` along the strip (the texture repeats along it).
+    """
+    rows = max(4, int(math.ceil(width_m / texel_m)))
+    cols = max(4, int(math.ceil(period_m / texel_m)))
+    if kind not in ("taxiway", "road"):
+        raise ValueError(f"kind must be 'taxiway' or 'road', got {kind!r}")
+    if flat:
+        return np.full((rows, cols, 3), 60, dtype=np.uint8)
+    base = np.array(SURFACE_COLOURS["taxiway_asphalt" if kind == "taxiway" else "road_asphalt"])
+    colour = base[None, None, :] * (1.0 + 0.03 * rng.standard_normal((rows, cols)))[..., None]
+    x_edges = np.linspace(0.0, period_m, cols + 1)
+    y_edges = np.linspace(-width_m / 2, width_m / 2, rows + 1)
+    if kind == "taxiway":
+        rects = [(0.0, period_m, -0.075, 0.075)]
+        paint_colour = SURFACE_COLOURS["paint_yellow"]
+    else:
+        rects = [(0.0, 3.0, -0.06, 0.06), (0.0, period_m, -width_m / 2 + 0.3, -width_m / 2 + 0.45),
+                 (0.0, period_m, width_m / 2 - 0.45, width_m / 2 - 0.3)]
+        paint_colour = SURFACE_COLOURS["paint_white"]
+    alpha = coverage_of_rectangles(np.array(rects), x_edges, y_edges) * 0.85
+    colour = colour * (1 - alpha[..., None]) + np.array(paint_colour) * alpha[..., None]
+    return _to_uint8(colour)
