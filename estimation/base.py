@@ -247,9 +247,15 @@ _INERTIAL_FIELDS = (("v_runway_mps", (3,)), ("v_camera_mps", (3,)), ("omega_came
 
 
 def _check_inertial(inp: ObserverInput) -> None:
-    """Shapes and finiteness of the inertial part of an input (programming errors)."""
+    """Shapes and finiteness of the inertial part of an input (programming errors).
+
+    An input that passed is marked, so the same prepared input stepped through by several
+    observers is checked once (a ``dataclasses.replace`` copy is checked again).
+    """
     if not isinstance(inp, ObserverInput):
         raise ValueError(f"step() expects an ObserverInput, got {type(inp).__name__}")
+    if inp.__dict__.get("_inertial_checked", False):
+        return
     t = inp.t_s
     if isinstance(t, bool) or not isinstance(t, (int, float, np.floating)) or not math.isfinite(t):
         raise ValueError(f"ObserverInput.t_s must be a finite number of seconds, got {t!r}")
@@ -261,6 +267,7 @@ def _check_inertial(inp: ObserverInput) -> None:
         if not math.isfinite(float(value.sum())):
             raise ValueError(f"ObserverInput.{name} at t = {t:g} s holds a NaN or infinite value "
                              "(inertial data must be complete; fix the telemetry)")
+    object.__setattr__(inp, "_inertial_checked", True)
 
 
 # --------------------------------------------------------------------------- observer

@@ -95,7 +95,6 @@ class KF2P(_PointsObserver):
         self._H[1, 1] = self._H[3, 2] = -1.0
         self._R = np.zeros((4, 4))
         self._z = np.zeros(4)
-        self._Q_unit = np.diag([1.0, 1.0, 1.0, 1.0])
         v = first.v_runway_mps
         self._v = (float(v[0]), float(v[1]), float(v[2]))
         self._t_corrected = float(first.t_s)
@@ -103,9 +102,18 @@ class KF2P(_PointsObserver):
         self._eta = 1.0 / dh0_m
 
     def _predict(self, d1, d2, d3, dt_s, v_old, v_new) -> None:
+        # filterpy's predict (x = F x + B u, P = F P F' + Q) written out for F = I: the same
+        # maths without four 4x4 products at every 50 Hz step; the update below is filterpy's
         kf = self._kf
+        x = kf.x
+        x[0] -= d1
+        x[1] -= d2
+        x[2] -= d2
+        x[3] -= d3
         q = (self.params.velocity_sigma_mps * dt_s) ** 2
-        kf.predict(u=np.array([d1, d2, d3]), Q=self._Q_unit * q)       # x = F x + B u, P = F P F' + Q
+        P = kf.P
+        for i in range(4):
+            P[i, i] += q
         self._sync_outputs()
 
     def _correct(self, measurement: np.ndarray, dt_c: float, v) -> None:
