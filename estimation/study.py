@@ -467,23 +467,31 @@ def _academic_study(spec: StudySpec, out: Path | None, echo) -> dict:
 
 # --------------------------------------------------------------------------- plots
 def _plot_error_vs_dx(case: Case, runs: dict, title: str, path: Path) -> None:
+    """Two panels against dX: the error dH - dH_hat (linear, +-60 m) and its magnitude (log)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(9, 5))
+    fig, (ax_lin, ax_log) = plt.subplots(2, 1, figsize=(9, 7.5), sharex=True)
     for name, run in runs.items():
-        ax.plot(case.dx_true_m, case.dh_true_m - run.dh_m, lw=1.0, label=name)
-    ax.set_yscale("symlog", linthresh=0.01)
-    ax.set_xlabel("dX (m)")
-    ax.set_ylabel("dH - dH_hat (m), symlog")
-    for h in (400, 200, 100):
-        i = np.nonzero(case.dh_true_m <= h * FT_TO_M)[0]
-        if i.size:
-            ax.axvline(case.dx_true_m[i[0]], color="0.7", lw=0.8, ls=":")
-            ax.text(case.dx_true_m[i[0]], ax.get_ylim()[1], f"{h} ft", fontsize=8, va="top", ha="center")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, ncol=2)
-    ax.set_title(title, fontsize=10)
+        error = case.dh_true_m - run.dh_m
+        ax_lin.plot(case.dx_true_m, error, lw=0.8, label=name)
+        ax_log.plot(case.dx_true_m, np.abs(error), lw=0.8, label=name)
+    ax_lin.set_ylim(-60, 60)
+    ax_lin.set_ylabel("dH - dH_hat (m)")
+    ax_log.set_yscale("log")
+    ax_log.set_ylim(1e-9, 1e3)
+    ax_log.set_ylabel("|dH - dH_hat| (m)")
+    ax_log.set_xlabel("dX (m)")
+    for ax in (ax_lin, ax_log):
+        for h in (400, 200, 100):
+            i = np.nonzero(case.dh_true_m <= h * FT_TO_M)[0]
+            if i.size:
+                ax.axvline(case.dx_true_m[i[0]], color="0.6", lw=0.8, ls=":")
+                if ax is ax_lin:
+                    ax.text(case.dx_true_m[i[0]], 58, f"{h} ft", fontsize=8, va="top", ha="center")
+        ax.grid(alpha=0.3)
+    ax_log.legend(fontsize=8, ncol=4, loc="lower left")
+    ax_lin.set_title(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)
