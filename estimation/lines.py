@@ -68,7 +68,7 @@ from visland.estimation.lines_model import (edge_terms, edge_terms_and_jacobian,
 __all__ = [
     "CCPI2L", "CCCJ2L", "II2L", "EKF2L", "OJ2L",
     "CCPI2LParams", "CCCJ2LParams", "II2LParams", "EKF2LParams", "OJ2LParams",
-    "LINE_OBSERVERS",
+    "LINE_OBSERVERS", "ccpi_correction", "cccj_increment", "cccj_jacobian",
 ]
 
 
