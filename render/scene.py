@@ -206,7 +206,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     else:
         extent = 12800.0
         centre = (runway.length_m / 2.0, 0.0)
-        fields = textures.fields_texture(np.random.default_rng([params.seed, 1]), 2048, extent, centre,
+        fields = textures.fields_texture(np.random.default_rng([params.seed, 1]), 1024, extent, centre,
                                          layout.grass_rect)
         grass = textures.grass_detail(np.random.default_rng([params.seed, 2]), 1024)
 

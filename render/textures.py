@@ -67,7 +67,7 @@ def tileable_noise(shape, rng: np.random.Generator, beta: float = 2.0, cutoff: f
 
 
 def _to_uint8(image) -> np.ndarray:
-    return np.clip(np.rint(image), 0, 255).astype(np.uint8)
+    return np.clip(np.rint(image), 0, 255, dtype=np.float32 if image.dtype == np.float32 else None).astype(np.uint8)
 
 
 def grass_detail(rng: np.random.Generator, size: int = 1024) -> np.ndarray:
@@ -129,56 +129,56 @@ def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_
     angle_deg : direction of the field pattern relative to the runway.
     """
     texel = extent_m / size
-    coords = (np.arange(size) + 0.5) * texel - extent_m / 2.0
-    x = centre_xy_m[0] + coords[None, :]
-    y = centre_xy_m[1] + coords[:, None]
+    coords = ((np.arange(size) + 0.5) * texel - extent_m / 2.0).astype(np.float32)
+    x = np.float32(centre_xy_m[0]) + coords[None, :]
+    y = np.float32(centre_xy_m[1]) + coords[:, None]
     a = math.radians(angle_deg)
     # field grid coordinates: rotated, offset so the pattern does not align with the runway
-    u = (x * math.cos(a) + y * math.sin(a)) + 5.0 * extent_m
-    v = (-x * math.sin(a) + y * math.cos(a)) + 5.0 * extent_m
-    n_strips = int(11 * extent_m / 150.0) + 2
+    u = (x * math.cos(a) + y * math.sin(a)) + np.float32(5.0 * extent_m)
+    v = (-x * math.sin(a) + y * math.cos(a)) + np.float32(5.0 * extent_m)
+    n_strips = int(11 * extent_m / 120.0) + 2
     widths = rng.uniform(120.0, 420.0, n_strips)
-    strip_edges = np.concatenate([[0.0], np.cumsum(widths)])
-    strip = np.clip(np.searchsorted(strip_edges, u) - 1, 0, n_strips - 1)
-    n_fields = int(11 * extent_m / 180.0) + 2
+    strip_edges = np.concatenate([[0.0], np.cumsum(widths)]).astype(np.float32)
+    strip = np.clip(np.searchsorted(strip_edges, u.ravel()).reshape(u.shape) - 1, 0, n_strips - 1)
+    n_fields = int(11 * extent_m / 160.0) + 2
     lengths = rng.uniform(160.0, 650.0, (n_strips, n_fields))
     field_edges = np.concatenate([np.zeros((n_strips, 1)), np.cumsum(lengths, axis=1)], axis=1)
-    offsets = rng.uniform(0.0, 400.0, n_strips)
+    offsets = rng.uniform(0.0, 400.0, n_strips).astype(np.float32)
     vv = v + offsets[strip]
-    # per-strip searchsorted, vectorised through a flat index
+    # fields of every strip share one sorted array: strip k's edges are shifted by k * 1e7 m
     flat_edges = (field_edges + (np.arange(n_strips) * 1e7)[:, None]).ravel()
-    field = np.searchsorted(flat_edges, vv + strip * 1e7) - 1 - strip * (n_fields + 1)
+    field = np.searchsorted(flat_edges, (vv + strip * 1e7).ravel()).reshape(u.shape) - 1 - strip * (n_fields + 1)
     field = np.clip(field, 0, n_fields - 1)
     field_id = strip * n_fields + field
     n_ids = n_strips * n_fields
-    colour_index = rng.integers(0, len(_FIELD_PALETTE), n_ids)
-    brightness = rng.uniform(0.9, 1.08, n_ids)
-    kind = rng.random(n_ids)                       # < 0.1 woods, < 0.13 built-up
-    image = _FIELD_PALETTE[colour_index[field_id]] * brightness[field_id][..., None]
+    # per-field colour; woods (10 %) and built-up patches (3 %) get their own look below
+    colours = (_FIELD_PALETTE[rng.integers(0, len(_FIELD_PALETTE), n_ids)]
+               * rng.uniform(0.9, 1.08, n_ids)[:, None]).astype(np.float32)
+    kind = rng.random(n_ids)
+    image = colours[field_id]
     # within-field texture: furrows along the strip direction and large-scale soil variation
-    furrow = np.sin(u * 2 * math.pi / 18.0 + rng.uniform(0, 6.3)) * 0.035
-    soil = tileable_noise((size, size), rng, beta=2.4) * 0.06
-    image *= (1.0 + furrow + soil)[..., None]
+    soil = tileable_noise((size, size), rng, beta=2.4).astype(np.float32)
+    shade = 1.0 + np.sin(u * np.float32(2 * math.pi / 18.0)) * np.float32(0.035) + np.float32(0.06) * soil
+    image *= shade[..., None]
     woods = kind[field_id] < 0.10
-    blotch = tileable_noise((size, size), rng, beta=1.4)
-    wood_colour = np.array([46.0, 66.0, 34.0])[None, None, :] * (1.0 + 0.18 * blotch)[..., None]
-    image = np.where(woods[..., None], wood_colour, image)
+    blotch = tileable_noise((size, size), rng, beta=1.4).astype(np.float32)
+    image[woods] = np.array([46.0, 66.0, 34.0], np.float32) * (1.0 + 0.18 * blotch[woods])[:, None]
     built = (kind[field_id] >= 0.10) & (kind[field_id] < 0.13)
-    speck = rng.random((size, size))
-    roofs = np.where(speck[..., None] < 0.35, np.array([150.0, 92.0, 76.0]), np.array([128.0, 126.0, 118.0]))
-    image = np.where(built[..., None], roofs * (0.85 + 0.3 * speck[..., None]), image)
+    speck = rng.random(int(built.sum())).astype(np.float32)
+    roofs = np.where(speck[:, None] < 0.35, np.array([150.0, 92.0, 76.0], np.float32),
+                     np.array([128.0, 126.0, 118.0], np.float32))
+    image[built] = roofs * (0.85 + 0.3 * speck[:, None])
     # hedges and tracks on field boundaries
     du = np.abs(u - strip_edges[strip])
-    dv = np.abs(vv - field_edges[strip, field])
+    dv = np.abs(vv - field_edges[strip, field].astype(np.float32))
     hedge = (np.minimum(du, dv) < 0.8 * texel) & (rng.random((size, size)) < 0.7)
-    image = np.where(hedge[..., None], np.array([58.0, 76.0, 40.0]), image)
-    # mown airport grass
+    image[hedge] = np.array([58.0, 76.0, 40.0], np.float32)
+    # mown airport grass, with mowing stripes
     x0, x1, y0, y1 = airport_rect_m
     inside = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
-    grass = np.array([104.0, 138.0, 66.0])[None, None, :] * (1.0 + 0.05 * soil[..., None] / 0.06)
-    mowing = (np.floor((y - y0) / 12.0) % 2) * 0.035
-    grass = grass * (1.0 + mowing)[..., None]
-    image = np.where(inside[..., None], grass, image)
+    mowing = 1.0 + (np.floor((y - y0) / 12.0) % 2) * 0.035 + 0.05 * soil
+    grass = np.array([104.0, 138.0, 66.0], np.float32)[None, None, :] * np.broadcast_to(mowing, inside.shape)[..., None]
+    image[inside] = grass[inside]
     return _to_uint8(image)
 
 
@@ -213,8 +213,6 @@ class RunwayFields:
     """Low-frequency fields over the whole runway (stains, rubber, wear), sampled seamlessly per tile."""
 
     def __init__(self, runway: Runway, layout: MarkingLayout, rng: np.random.Generator):
-        from scipy.ndimage import map_coordinates
-        self._map = map_coordinates
         self.runway = runway
         self.step_x = 1.0
         self.step_y = 0.25
@@ -236,13 +234,16 @@ class RunwayFields:
         ex = np.maximum(envelope_x(x), envelope_x(runway.length_m - x))
         # main gear tracks: a band of +-(2..8) m about the centre line
         ey = np.exp(-0.5 * ((np.abs(y) - 4.0) / 2.6) ** 2) + 0.6 * np.exp(-0.5 * (y / 1.5) ** 2)
-        self.rubber = streaks * ey[:, None] * ex[None, :]
+        self.rubber = (streaks * ey[:, None] * ex[None, :]).astype(np.float32)
 
     def sample(self, field: np.ndarray, x_m, y_m) -> np.ndarray:
-        cols = x_m / self.step_x + 1.0
-        rows = (y_m + self.runway.width_m / 2.0) / self.step_y + 1.0
-        rr, cc = np.meshgrid(rows, cols, indexing="ij")
-        return self._map(field, [rr, cc], order=1, mode="nearest")
+        """Bilinear samples of ``field`` at the grid ``y_m (rows) x x_m (cols)``, (len(y_m), len(x_m)) float32."""
+        import cv2
+        cols = (np.asarray(x_m) / self.step_x + 1.0).astype(np.float32)
+        rows = ((np.asarray(y_m) + self.runway.width_m / 2.0) / self.step_y + 1.0).astype(np.float32)
+        map_x = np.broadcast_to(cols[None, :], (len(rows), len(cols))).copy()
+        map_y = np.broadcast_to(rows[:, None], (len(rows), len(cols))).copy()
+        return cv2.remap(field, map_x, map_y, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
 
 def _smooth_noise(shape, rng, beta):
@@ -250,7 +251,7 @@ def _smooth_noise(shape, rng, beta):
     pad_r = max(rows, 8)
     pad_c = max(cols, 8)
     field = tileable_noise((pad_r, pad_c), rng, beta=beta)
-    return field[:rows, :cols]
+    return np.ascontiguousarray(field[:rows, :cols], dtype=np.float32)
 
 
 def runway_tile(x0_m: float, x1_m: float, runway: Runway, layout: MarkingLayout, fields: RunwayFields,
@@ -271,10 +272,9 @@ def runway_tile(x0_m: float, x1_m: float, runway: Runway, layout: MarkingLayout,
     y_edges = np.linspace(-W / 2.0, W / 2.0, rows + 1)
     xc = 0.5 * (x_edges[:-1] + x_edges[1:])
     yc = 0.5 * (y_edges[:-1] + y_edges[1:])
-    base = np.array(SURFACE_COLOURS[surface])
+    base = np.array(SURFACE_COLOURS[surface], dtype=np.float32)
     stain = fields.sample(fields.stain, xc, yc)
-    grain = rng.standard_normal((rows, cols)) * 0.025
-    colour = base[None, None, :] * (1.0 + 0.07 * stain + grain)[..., None]
+    colour = base[None, None, :] * (1.0 + np.float32(0.07) * stain)[..., None]
     if surface == "concrete":
         # slab joints every 7.5 m across and along (darker lines one texel wide)
         jx = np.abs(((xc + 3.75) % 7.5) - 3.75) < texel_m / 2
@@ -285,13 +285,14 @@ def runway_tile(x0_m: float, x1_m: float, runway: Runway, layout: MarkingLayout,
     if paint.any():
         wear_field = fields.sample(fields.wear, xc, yc)
         rubber_field = fields.sample(fields.rubber, xc, yc)
-        worn = np.clip(wear * (0.55 + 0.45 * wear_field) + wear * 0.8 * rubber_field
-                       + 0.15 * wear * rng.standard_normal((rows, cols)), 0.0, 0.95)
-        alpha = paint * (1.0 - worn)
-        colour = colour * (1 - alpha[..., None]) + np.array(SURFACE_COLOURS["paint_white"]) * alpha[..., None]
+        worn = np.clip(np.float32(wear) * (0.55 + 0.45 * wear_field + 0.8 * rubber_field), 0.0, 0.95)
+        alpha = (paint * (1.0 - worn)).astype(np.float32)
+        white = np.array(SURFACE_COLOURS["paint_white"], dtype=np.float32)
+        colour = colour * (1 - alpha[..., None]) + white * alpha[..., None]
     if rubber > 0:
-        r = np.clip(fields.sample(fields.rubber, xc, yc) * rubber * 0.85, 0, 0.9)
-        colour = colour * (1 - r[..., None]) + np.array(SURFACE_COLOURS["rubber"]) * r[..., None]
+        r = np.clip(fields.sample(fields.rubber, xc, yc) * np.float32(rubber * 0.85), 0, 0.9)
+        black = np.array(SURFACE_COLOURS["rubber"], dtype=np.float32)
+        colour = colour * (1 - r[..., None]) + black * r[..., None]
     return _to_uint8(colour)
 
 
