@@ -138,7 +138,7 @@ class Trajectory:
     dpsi_rad : (n,) heading deviation ``heading - runway heading`` wrapped to [-pi, pi).
     omega_body_rps : (n, 3) body angular rates (p, q, r).
     gamma_rad, chi_rad, nz_g, alpha_rad : (n,) flight path, air-track heading, load factor, AoA.
-    bank_cmd_rad, nz_cmd_g : (n,) guidance orders held over each step.
+    bank_cmd_rad, nz_cmd_g : (n,) guidance orders at each sample.
     wind_ned_mps : (n, 3) wind velocity.
     """
 
@@ -287,8 +287,20 @@ class _Guidance:
         self.bank_limit = math.radians(params.bank_limit_deg)
         self.v_intercept_fraction = math.sin(math.radians(params.intercept_angle_deg))
 
+    def update_mode(self, p_runway, v_runway):
+        """Arm the glide-slope mode once its order turns to a descent (called once per step)."""
+        if self.vertical_mode == "ALT":
+            dgs = -p_runway[2] + (p_runway[0] - self.aim_m) * self.tan_gs
+            if -v_runway[0] * self.tan_gs - self.p.k_h_per_s * dgs <= 0.0:
+                self.vertical_mode = "GS"
+
     def orders(self, p_runway, v_runway, gamma, mu):
-        """Bank order (rad) and load-factor order (g) from the true position and velocity."""
+        """Bank order (rad) and load-factor order (g) from the true position and velocity.
+
+        A continuous function of the state (the vertical mode only changes between steps), so
+        the orders can be evaluated at every integration stage and the attitude rates are
+        continuous: the inertial unit's rates are the derivative of the attitude flown.
+        """
         p = self.p
         x, y, z = p_runway
         vx, vy, vz = v_runway
@@ -307,10 +319,7 @@ class _Guidance:
         hdot_gp = -vx * self.tan_gs
         hdot_cmd = hdot_gp - p.k_h_per_s * dgs
         if self.vertical_mode == "ALT":
-            if hdot_cmd <= 0.0:
-                self.vertical_mode = "GS"
-            else:
-                hdot_cmd = p.k_alt_per_s * (self.altitude_hold_m - dh)
+            hdot_cmd = p.k_alt_per_s * (self.altitude_hold_m - dh)
         gamma_cmd = math.asin(max(-0.5, min(0.5, hdot_cmd / self.V)))
         gamma_cmd = max(self.gamma_min, min(self.gamma_max, gamma_cmd))
         nz_cmd = math.cos(gamma) / math.cos(mu) + self.V / G_MPS2 * p.k_gamma_per_s * (gamma_cmd - gamma)
@@ -323,8 +332,10 @@ def simulate_flight(scenario: Scenario, aircraft: AircraftParams | None = None,
                     max_duration_s: float = 400.0) -> Trajectory:
     """Fly ``scenario`` from its initial conditions to the threshold.
 
-    Integrates the model of the module docstring with a fixed-step RK4 at ``rate_hz``
-    (orders held over each step) and returns the sampled :class:`Trajectory`.
+    Integrates the model of the module docstring with a fixed-step RK4 at ``rate_hz``, the
+    guidance orders evaluated at every stage (so attitude rates are continuous and the
+    recorded body rates are the derivative of the attitude flown), and returns the sampled
+    :class:`Trajectory`.
     """
     aircraft = aircraft or AircraftParams()
     guidance_params = guidance or GuidanceParams()
@@ -366,18 +377,29 @@ def simulate_flight(scenario: Scenario, aircraft: AircraftParams | None = None,
         wx, wy, wz = _wind_runway_mps(wind, t, crosswind_t0, gust_t0)
         return (q00 * wx + q01 * wy + q02 * wz, q10 * wx + q11 * wy + q12 * wz, q20 * wx + q21 * wy + q22 * wz)
 
-    def derivative(t, s, bank_cmd, nz_cmd):
-        _, _, _, gamma, chi, mu, nz, nzdot = s
-        cg, sg = math.cos(gamma), math.sin(gamma)
+    def kinematics(t, s):
+        """Position and ground velocity in the runway frame, ground velocity in NED, wind."""
+        n_, e_, d_, gamma, chi = s[0], s[1], s[2], s[3], s[4]
         wn, we, wd = wind_ned(t)
+        cg = math.cos(gamma)
         vn = V * cg * math.cos(chi) + wn
         ve = V * cg * math.sin(chi) + we
-        vd = -V * sg + wd
+        vd = -V * math.sin(gamma) + wd
+        p_rwy = (r00 * n_ + r01 * e_ + r02 * d_, r10 * n_ + r11 * e_ + r12 * d_, r20 * n_ + r21 * e_ + r22 * d_)
+        v_rwy = (r00 * vn + r01 * ve + r02 * vd, r10 * vn + r11 * ve + r12 * vd, r20 * vn + r21 * ve + r22 * vd)
+        return p_rwy, v_rwy, (vn, ve, vd), (wn, we, wd)
+
+    def derivative(t, s):
+        """State derivative with the guidance orders evaluated at this very state (and the orders)."""
+        _, _, _, gamma, chi, mu, nz, nzdot = s
+        p_rwy, v_rwy, (vn, ve, vd), _ = kinematics(t, s)
+        bank_cmd, nz_cmd = guide.orders(p_rwy, v_rwy, gamma, mu)
+        cg = math.cos(gamma)
         gamma_dot = G_MPS2 / V * (nz * math.cos(mu) - cg)
         chi_dot = G_MPS2 * nz * math.sin(mu) / (V * cg)
         mu_dot = max(-roll_rate_max, min(roll_rate_max, (bank_cmd - mu) / tau_roll))
         nz_ddot = w_nz * w_nz * (nz_cmd - nz) - 2.0 * xi_nz * w_nz * nzdot
-        return (vn, ve, vd, gamma_dot, chi_dot, mu_dot, nzdot, nz_ddot)
+        return (vn, ve, vd, gamma_dot, chi_dot, mu_dot, nzdot, nz_ddot), (bank_cmd, nz_cmd)
 
     n_max = int(max_duration_s * rate_hz) + 1
     rows = []          # state at each sample
@@ -387,25 +409,19 @@ def simulate_flight(scenario: Scenario, aircraft: AircraftParams | None = None,
     t = 0.0
     end_reason = "max_duration"
     for k in range(n_max):
-        n_, e_, d_ = state[0], state[1], state[2]
-        x_r = r00 * n_ + r01 * e_ + r02 * d_
+        x_r = r00 * state[0] + r01 * state[1] + r02 * state[2]
+        # onsets and modes change only between steps, so each step integrates a smooth field
         if wind.crosswind_onset_m is not None and crosswind_t0 is None and -x_r <= wind.crosswind_onset_m:
             crosswind_t0 = t
         if wind.gust and gust_t0 is None and -x_r <= wind.gust_onset_m:
             gust_t0 = t
-        wn, we, wd = wind_ned(t)
-        cg = math.cos(state[3])
-        vn = V * cg * math.cos(state[4]) + wn
-        ve = V * cg * math.sin(state[4]) + we
-        vd = -V * math.sin(state[3]) + wd
-        p_rwy = (x_r, r10 * n_ + r11 * e_ + r12 * d_, r20 * n_ + r21 * e_ + r22 * d_)
-        v_rwy = (r00 * vn + r01 * ve + r02 * vd, r10 * vn + r11 * ve + r12 * vd, r20 * vn + r21 * ve + r22 * vd)
-        bank_cmd, nz_cmd = guide.orders(p_rwy, v_rwy, state[3], state[5])
-        k1 = derivative(t, state, bank_cmd, nz_cmd)
+        p_rwy, v_rwy, _, w_ned = kinematics(t, state)
+        guide.update_mode(p_rwy, v_rwy)
+        k1, order = derivative(t, state)
         rows.append(tuple(state))
         rates.append((k1[3], k1[4], k1[5], k1[6]))
-        orders.append((bank_cmd, nz_cmd))
-        winds.append((wn, we, wd))
+        orders.append(order)
+        winds.append(w_ned)
         if x_r >= 0.0:
             end_reason = "threshold"
             break
@@ -413,12 +429,9 @@ def simulate_flight(scenario: Scenario, aircraft: AircraftParams | None = None,
             end_reason = "ground"
             break
         half = 0.5 * dt
-        s2 = [s + half * d for s, d in zip(state, k1)]
-        k2 = derivative(t + half, s2, bank_cmd, nz_cmd)
-        s3 = [s + half * d for s, d in zip(state, k2)]
-        k3 = derivative(t + half, s3, bank_cmd, nz_cmd)
-        s4 = [s + dt * d for s, d in zip(state, k3)]
-        k4 = derivative(t + dt, s4, bank_cmd, nz_cmd)
+        k2, _ = derivative(t + half, [s + half * d for s, d in zip(state, k1)])
+        k3, _ = derivative(t + half, [s + half * d for s, d in zip(state, k2)])
+        k4, _ = derivative(t + dt, [s + dt * d for s, d in zip(state, k3)])
         state = [s + dt / 6.0 * (a + 2.0 * b + 2.0 * c + e)
                  for s, a, b, c, e in zip(state, k1, k2, k3, k4)]
         t = (k + 1) * dt

@@ -114,4 +114,4 @@ def test_a_100_s_approach_is_simulated_in_well_under_a_second():
     trajectory = simulate_flight(scenario)
     elapsed = time.perf_counter() - start
     assert trajectory.duration_s > 95.0
-    assert elapsed < 0.5
+    assert elapsed < 0.8   # the whole `visland simulate` of 100 s must stay under 1 s
