@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from visland.estimation.inputs import FeatureSeries, InertialSeries, PreparedInputs, prepare_inputs
-from visland.estimation.metrics import FT_TO_M, aggregate_at_100ft, run_metrics
+from visland.estimation.metrics import FT_TO_M, aggregate_at_100ft, error_at_height, run_metrics
 from visland.estimation.registry import make_observer, observer_features
 from visland.estimation.runner import ObserverRun, run_observer
 from visland.estimation.thesis_tables import THESIS_CONDITIONS, thesis_value
@@ -417,7 +417,6 @@ def _ecc_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: str 
             run, metrics = _run(obs, case, condition.params.get(obs))
             runs[obs] = run
             dy_err = case.dy_true_m - run.dy_m
-            from visland.estimation.metrics import error_at_height
             dy400 = error_at_height(case.dh_true_m, case.dh_true_m - dy_err, 400 * FT_TO_M)
             dy100 = error_at_height(case.dh_true_m, case.dh_true_m - dy_err, 100 * FT_TO_M)
             figures.setdefault(scenario, {})[obs] = {
