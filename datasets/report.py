@@ -60,7 +60,7 @@ def _table(header: list[str], rows: list[list]) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
-def _plots_features(measurements, labels):
+def _plots_features(measurements, labels, camera):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -70,18 +70,22 @@ def _plots_features(measurements, labels):
         for name, color in zip(CORNER_NAMES[:2], ("tab:blue", "tab:red")):
             column = f"{name}_{coord}_px"
             if labels is not None:
-                ax.plot(labels["t_s"], labels[column], color=color, lw=2.5, alpha=0.35, label=f"{name} (labels)")
+                visible = labels[f"{name}_visible"] > 0.5
+                ax.plot(labels["t_s"], np.where(visible, labels[column], np.nan), color=color, lw=2.5, alpha=0.35,
+                        label=f"{name} (labels)")
             ax.plot(t, measurements[column], ".", ms=2, color=color, label=f"{name} (measured)")
+        if camera is not None:
+            ax.set_ylim(-0.5, (camera.width if coord == "u" else camera.height) - 0.5)
         ax.set_ylabel(f"{coord} (px)")
-        ax.set_title(f"threshold corners: {coord}")
+        ax.set_title(f"threshold corners P', P'': {coord}")
         ax.legend(fontsize=7, loc="best")
-    for ax, quantity, unit in zip(axes[1], ("theta_rad", "rho"), ("rad", "")):
+    for ax, quantity, unit in zip(axes[1], ("theta_rad", "rho"), ("(rad)", "(normalised)")):
         for name, color in zip(("left", "right"), ("tab:green", "tab:purple")):
             column = f"{name}_{quantity}"
             if labels is not None:
                 ax.plot(labels["t_s"], labels[column], color=color, lw=2.5, alpha=0.35, label=f"{name} edge (labels)")
             ax.plot(t, measurements[column], ".", ms=2, color=color, label=f"{name} edge (measured)")
-        ax.set_ylabel(f"{quantity.split('_')[0]} {unit}".strip())
+        ax.set_ylabel(f"{quantity.split('_')[0]} {unit}")
         ax.set_xlabel("t (s)")
         ax.set_title(f"edge lines: {quantity.split('_')[0]}")
         ax.legend(fontsize=7, loc="best")
@@ -106,33 +110,57 @@ def _observer_series(estimates, observer):
     return {k: v[keep] for k, v in estimates.items()}
 
 
+_GROUPS = (("two points", "-2p"), ("two lines", "-2l"), ("ECC'15 system", "ecc-"))
+
+
+def _group_of(observer: str) -> str:
+    for label, key in _GROUPS:
+        if key in observer:
+            return label
+    return "other"
+
+
 def _plots_estimates(estimates, truth, observers):
+    """dH against truth, then the errors of dH, dY and dX, one column per feature set."""
     import matplotlib.pyplot as plt
-    quantities = [("dh_m", "dH (m)"), ("dy_m", "dY (m)"), ("dx_m", "dX (m)")]
-    fig, axes = plt.subplots(len(quantities), 2, figsize=(12, 3.0 * len(quantities)), sharex="col")
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for row, (column, label) in enumerate(quantities):
-        ax_value, ax_error = axes[row]
+    groups = [label for label, _ in _GROUPS if any(_group_of(o) == label for o in observers)]
+    groups += ["other"] if any(_group_of(o) == "other" for o in observers) else []
+    quantities = [("dh_m", "dH"), ("dy_m", "dY"), ("dx_m", "dX")]
+    rows = len(quantities) + 1
+    fig, axes = plt.subplots(rows, len(groups), figsize=(4.2 * len(groups) + 1, 2.5 * rows), sharex=True,
+                             squeeze=False)
+    for col, group in enumerate(groups):
+        members = [o for o in observers if _group_of(o) == group]
+        ax = axes[0][col]
         if truth is not None:
-            ax_value.plot(truth["t_s"], truth[column], color="k", lw=2, label="truth")
-        for k, observer in enumerate(observers):
+            ax.plot(truth["t_s"], truth["dh_m"], color="k", lw=2.5, alpha=0.5, label="truth")
+        for k, observer in enumerate(members):
             series = _observer_series(estimates, observer)
-            color = colors[k % len(colors)]
-            ax_value.plot(series["t_s"], series[column], color=color, lw=1, label=observer)
-            if truth is not None:
+            ax.plot(series["t_s"], series["dh_m"], color=f"C{k}", lw=1, label=observer)
+        ax.set_yscale("log")
+        ax.set_title(group)
+        ax.legend(fontsize=7)
+        if col == 0:
+            ax.set_ylabel("dH (m)")
+        for row, (column, label) in enumerate(quantities, start=1):
+            ax = axes[row][col]
+            if truth is None:
+                ax.set_visible(False)
+                continue
+            for k, observer in enumerate(members):
+                series = _observer_series(estimates, observer)
+                if not np.isfinite(series[column]).any():
+                    continue
                 truth_at = np.interp(series["t_s"], truth["t_s"], truth[column])
-                ax_error.plot(series["t_s"], truth_at - series[column], color=color, lw=1, label=observer)
-        ax_value.set_ylabel(label)
-        ax_error.set_ylabel(f"truth - estimate, {label}")
-        if column == "dh_m":
-            ax_value.set_yscale("log")
-            ax_error.set_yscale("symlog", linthresh=1.0)
-        else:
-            ax_error.set_yscale("symlog", linthresh=1.0)
-        ax_error.axhline(0, color="k", lw=0.5)
-    axes[0][0].legend(fontsize=7, ncol=2)
-    axes[-1][0].set_xlabel("t (s)")
-    axes[-1][1].set_xlabel("t (s)")
+                ax.plot(series["t_s"], truth_at - series[column], color=f"C{k}", lw=0.8)
+            ax.set_yscale("symlog", linthresh=0.1)
+            ax.axhline(0, color="k", lw=0.5)
+            if col == 0:
+                ax.set_ylabel(f"{label} error (m)")
+            if row == rows - 1:
+                ax.set_xlabel("t (s)")
+    fig.suptitle("estimates (top) and truth - estimate (symmetric log scale, linear within 0.1 m)", y=1.0)
+    fig.tight_layout()
     return figure_to_data_uri(fig)
 
 
@@ -167,9 +195,9 @@ def _pixel_errors(measurements, labels, camera):
             d = np.abs(camera.line_distance_px(measurements[f"{edge}_rho"][:, None],
                                                measurements[f"{edge}_theta_rad"][:, None], samples))
             d = np.where(inside, d, np.nan)
-            with np.errstate(invalid="ignore"):
-                errors[f"{edge} edge"] = np.nanmean(np.where(np.isfinite(d), d, np.nan), axis=1) \
-                    if np.isfinite(d).any() else np.full(len(d), np.nan)
+            counts = np.isfinite(d).sum(axis=1)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                errors[f"{edge} edge"] = np.where(counts > 0, np.nansum(d, axis=1) / counts, np.nan)
     return errors
 
 
@@ -217,7 +245,7 @@ def write_report(path, *, title: str, summary_rows: list[tuple[str, str]], measu
     else:
         parts.append("<div class='ok'>Every frame was used.</div>")
     if metrics:
-        names = sorted({m for values in metrics.values() for m in values})
+        names = list(dict.fromkeys(m for values in metrics.values() for m in values))
         parts.append("<h2>Metrics (truth - estimate)</h2>")
         parts.append(_table(["observer"] + names, [[obs] + [metrics[obs].get(m) for m in names] for obs in metrics]))
     parts.append("<h2>Estimates against truth</h2>")
@@ -225,7 +253,7 @@ def write_report(path, *, title: str, summary_rows: list[tuple[str, str]], measu
     parts.append("<h2>Observability</h2>")
     parts.append(f"<img src='{_plot_observability(estimates, observers)}' alt='observability'>")
     parts.append("<h2>Image features</h2>")
-    parts.append(f"<img src='{_plots_features(measurements, labels)}' alt='features'>")
+    parts.append(f"<img src='{_plots_features(measurements, labels, camera)}' alt='features'>")
     parts.append(f"<img src='{_plot_heading(measurements, truth)}' alt='heading'>")
     if labels is not None:
         errors = _pixel_errors(measurements, labels, camera)

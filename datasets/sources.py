@@ -20,7 +20,7 @@ from visland.camera import CameraModel
 from visland.contracts import read_frames_csv, read_labels, read_telemetry, read_truth
 from visland.folder import FrameFolder, interpolate_telemetry
 
-__all__ = ["FrameSource", "FolderSource", "VideoSource", "open_source", "VIDEO_SUFFIXES"]
+__all__ = ["FrameSource", "FolderSource", "VideoSource", "LabelsSource", "open_source", "VIDEO_SUFFIXES"]
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".m4v", ".webm")
 
@@ -157,6 +157,32 @@ class VideoSource(FrameSource):
         capture.release()
 
 
+class LabelsSource(FrameSource):
+    """A simulated folder without images (``visland simulate``): frame times and exact features
+    from ``labels.csv``; only ``--source ideal`` can measure it."""
+
+    def __init__(self, root, camera=None, telemetry=None):
+        root = Path(root)
+        self.name = str(root)
+        labels_path = root / "labels.csv"
+        self.labels = read_labels(labels_path)
+        self.times_s = self.labels["t_s"]
+        camera_path = Path(camera) if isinstance(camera, (str, Path)) else root / "camera.json"
+        self.camera = camera if isinstance(camera, CameraModel) else CameraModel.load(camera_path)
+        telemetry_path = Path(telemetry) if telemetry else root / "telemetry.csv"
+        self.telemetry = read_telemetry(telemetry_path)
+        self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(telemetry_path))
+        truth = root / "truth.csv"
+        self.truth = read_truth(truth) if truth.exists() else None
+        if self.truth is not None and self.truth.n_rows != len(self.times_s):
+            raise ValueError(f"{truth}: {self.truth.n_rows} rows but labels.csv has {len(self.times_s)} frames")
+        runway = root / "runway.json"
+        self.runway_json = runway if runway.exists() else None
+
+    def frames(self, gray: bool = True, prefetch: int = 4):
+        raise ValueError(f"{self.name}: no frames/ folder; only --source ideal can process a simulated folder")
+
+
 def _count_frames(capture) -> int:
     """Frames a video really holds (the container's count is often wrong): grab them all."""
     count = 0
@@ -169,6 +195,8 @@ def open_source(path, camera=None, telemetry=None, frames_csv=None, fps=None) ->
     """A frame folder or a video file, by what ``path`` is."""
     path = Path(path)
     if path.is_dir():
+        if not (path / "frames").exists() and (path / "labels.csv").exists():
+            return LabelsSource(path, camera=camera, telemetry=telemetry)
         return FolderSource(path, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps)
     if path.is_file() and path.suffix.lower() in VIDEO_SUFFIXES:
         return VideoSource(path, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps)

@@ -1,0 +1,205 @@
+"""``visland compare``: tables in the thesis's form across processed runs (thesis Tables 5.14-5.17).
+
+Input: run folders written by ``visland process`` (``run.json``, ``estimates.csv``,
+``truth.csv``). For each measurement source (detection, tracking, anchored, ideal) and each
+observer:
+
+- on scenario 1 (the run whose scenario is ``thesis-1``; else the first run): the 5 %
+  convergence time of dH and the errors ``truth - estimate`` of dH, dY and dX when the true
+  height first falls to 400, 200 and 100 ft;
+- over all runs: the mean and (population) standard deviation of those errors at 100 ft.
+
+Writes ``compare.md`` (the tables), ``compare.json`` (every figure), ``compare.csv`` (tidy:
+source, observer, run, quantity, metric, value) and plots into ``--out``, prints the tables,
+and ends with one JSON line of the headline figures.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from visland.contracts import atomic_write_text, read_estimates, read_truth, write_csv
+
+__all__ = ["RunResult", "load_run", "run_figures", "compare_runs", "error_at_height_of", "QUANTITIES"]
+
+FT_TO_M = 0.3048
+HEIGHTS_FT = (400.0, 200.0, 100.0)
+#: (estimate column, truth column, label)
+QUANTITIES = (("dh_m", "dh_m", "dH"), ("dy_m", "dy_m", "dY"), ("dx_m", "dx_m", "dX"))
+
+
+def error_at_height_of(dh_true_m, q_true, q_est, height_m: float) -> float:
+    """``q_true - q_est`` when the true height first falls to ``height_m`` (linear interpolation)."""
+    dh = np.asarray(dh_true_m, dtype=float)
+    error = np.asarray(q_true, dtype=float) - np.asarray(q_est, dtype=float)
+    below = np.nonzero(dh <= height_m)[0]
+    if below.size == 0:
+        return math.nan
+    i = int(below[0])
+    if i == 0:
+        return float(error[0])
+    w = (dh[i - 1] - height_m) / (dh[i - 1] - dh[i]) if dh[i - 1] != dh[i] else 1.0
+    return float((1.0 - w) * error[i - 1] + w * error[i])
+
+
+@dataclass
+class RunResult:
+    """One processed run: its identity and per-observer estimate series at the frames."""
+
+    path: Path
+    source: str
+    scenario: str
+    truth: dict
+    series: dict           # observer -> dict of arrays (t_s, dh_m, dy_m, dx_m)
+
+
+def load_run(path) -> RunResult:
+    """Read a ``visland process`` output folder (errors name the file)."""
+    path = Path(path)
+    if not path.is_dir():
+        raise ValueError(f"{path}: run folder not found")
+    info_path = path / "run.json"
+    if not info_path.exists():
+        raise ValueError(f"{info_path}: not found (is {path} a 'visland process' output folder?)")
+    try:
+        info = json.loads(info_path.read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{info_path}: not valid JSON ({error.msg})") from None
+    truth_path = path / "truth.csv"
+    if not truth_path.exists():
+        raise ValueError(f"{truth_path}: not found; comparison needs the run's truth")
+    truth = read_truth(truth_path)
+    estimates = read_estimates(path / "estimates.csv")
+    series = {}
+    for observer in dict.fromkeys(estimates["observer"]):
+        keep = estimates["observer"] == observer
+        data = {k: estimates[k][keep] for k in ("t_s", "dh_m", "dy_m", "dx_m")}
+        if len(data["t_s"]) != truth.n_rows or not np.allclose(data["t_s"], truth["t_s"], atol=1e-6):
+            raise ValueError(f"{path / 'estimates.csv'}: observer {observer} has {len(data['t_s'])} rows whose times "
+                             f"do not match the {truth.n_rows} frames of truth.csv")
+        series[observer] = data
+    return RunResult(path, str(info.get("source", "?")), str(info.get("scenario") or path.name), dict(truth), series)
+
+
+def run_figures(run: RunResult) -> dict:
+    """``{observer: {"dH": {conv_time_5pct_s, err_400ft_m, ...}, "dY": {...}, "dX": {...}}}``."""
+    from visland.estimation.metrics import convergence_time_s
+    out = {}
+    dh_true = run.truth["dh_m"]
+    for observer, data in run.series.items():
+        figures = {}
+        for est_col, truth_col, label in QUANTITIES:
+            values = {}
+            if label == "dH":
+                values["conv_time_5pct_s"] = convergence_time_s(run.truth["t_s"], dh_true, data["dh_m"])
+            for h in HEIGHTS_FT:
+                values[f"err_{h:.0f}ft_m"] = error_at_height_of(dh_true, run.truth[truth_col], data[est_col],
+                                                                h * FT_TO_M)
+            figures[label] = values
+        out[observer] = figures
+    return out
+
+
+def _fmt(value, digits=3):
+    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def compare_runs(run_paths, out_dir, echo=print) -> dict:
+    """Build the comparison of ``run_paths`` into ``out_dir``; return its figures."""
+    runs = [load_run(p) for p in run_paths]
+    if not runs:
+        raise ValueError("give at least one run folder")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    per_run = [(run, run_figures(run)) for run in runs]
+    sources = list(dict.fromkeys(run.source for run in runs))
+    tidy = {k: [] for k in ("source", "observer", "run", "scenario", "quantity", "metric", "value")}
+    for run, figures in per_run:
+        for observer, by_quantity in figures.items():
+            for quantity, values in by_quantity.items():
+                for metric, value in values.items():
+                    for k, v in zip(tidy, (run.source, observer, str(run.path), run.scenario, quantity, metric, value)):
+                        tidy[k].append(v)
+    write_csv(out_dir / "compare.csv", tidy)
+
+    summary = {}
+    md = ["# visland comparison", "", f"{len(runs)} runs: " + ", ".join(f"{r.scenario} ({r.source})" for r in runs), ""]
+    for source in sources:
+        mine = [(r, f) for r, f in per_run if r.source == source]
+        reference = next(((r, f) for r, f in mine if r.scenario == "thesis-1"), mine[0])
+        observers = list(dict.fromkeys(o for _, f in mine for o in f))
+        summary[source] = {}
+        for quantity in ("dH", "dY", "dX"):
+            header = ["metric"] + observers
+            rows = []
+            if quantity == "dH":
+                rows.append([f"5 % convergence time (s), {reference[0].scenario}"]
+                            + [reference[1].get(o, {}).get("dH", {}).get("conv_time_5pct_s") for o in observers])
+            for h in HEIGHTS_FT:
+                rows.append([f"error at {h:.0f} ft (m), {reference[0].scenario}"]
+                            + [reference[1].get(o, {}).get(quantity, {}).get(f"err_{h:.0f}ft_m") for o in observers])
+            means, stds, counts = [], [], []
+            for o in observers:
+                errors = np.array([f[o][quantity]["err_100ft_m"] for _, f in mine if o in f], dtype=float)
+                finite = errors[np.isfinite(errors)]
+                means.append(float(np.mean(finite)) if finite.size else math.nan)
+                stds.append(float(np.std(finite)) if finite.size else math.nan)
+                counts.append(int(finite.size))
+            rows.append([f"mean error at 100 ft (m), {len(mine)} runs"] + means)
+            rows.append([f"standard deviation at 100 ft (m), {len(mine)} runs"] + stds)
+            md.append(f"## {quantity}: {source}")
+            md.append("")
+            md.append("| " + " | ".join(header) + " |")
+            md.append("|" + "---|" * len(header))
+            for row in rows:
+                md.append("| " + " | ".join([row[0]] + [_fmt(v) for v in row[1:]]) + " |")
+            md.append("")
+            summary[source][quantity] = {o: {"mean_err_100ft_m": m, "std_err_100ft_m": s, "n_runs": c,
+                                             **reference[1].get(o, {}).get(quantity, {})}
+                                         for o, m, s, c in zip(observers, means, stds, counts)}
+    text = "\n".join(md) + "\n"
+    atomic_write_text(out_dir / "compare.md", text)
+    atomic_write_text(out_dir / "compare.json", json.dumps(_clean(summary), indent=2) + "\n")
+    _plot(per_run, sources, out_dir)
+    echo(text)
+    return summary
+
+
+def _plot(per_run, sources, out_dir: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    for source in sources:
+        runs = [r for r, _ in per_run if r.source == source]
+        observers = list(dict.fromkeys(o for r in runs for o in r.series))
+        fig, axes = plt.subplots(len(QUANTITIES), 1, figsize=(10, 2.8 * len(QUANTITIES)), sharex=True)
+        for ax, (est_col, truth_col, label) in zip(axes, QUANTITIES):
+            for k, observer in enumerate(observers):
+                for j, run in enumerate(runs):
+                    if observer not in run.series:
+                        continue
+                    error = run.truth[truth_col] - run.series[observer][est_col]
+                    ax.plot(run.truth["dx_m"], error, color=f"C{k % 10}", lw=0.8, alpha=0.7,
+                            label=observer if j == 0 else None)
+            ax.set_ylabel(f"{label} error (m)")
+            ax.set_yscale("symlog", linthresh=1.0)
+            ax.axhline(0, color="k", lw=0.5)
+        axes[0].set_title(f"truth - estimate against dX, {source} ({len(runs)} runs)")
+        axes[0].legend(fontsize=7, ncol=4)
+        axes[-1].set_xlabel("dX (m)")
+        fig.savefig(out_dir / f"errors_vs_dx_{source}.png", dpi=90, bbox_inches="tight")
+        plt.close(fig)
+
+
+def _clean(value):
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value

@@ -1,0 +1,134 @@
+"""Image measurements of a frame source: detection, tracking, anchored tracking or the labels.
+
+Each function walks the frames in order (detection and tracking carry state from frame to
+frame: the region of interest, the templates) while the source decodes ahead in a background
+thread, and returns the ``measurements.csv`` columns (SPEC labels schema plus ``source``,
+``found``, ``reason``, ``confidence``) and the frames that could not be used.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from visland.contracts import LABEL_COLUMNS, MEASUREMENT_COLUMNS
+
+__all__ = ["Measurements", "measure", "SOURCES"]
+
+SOURCES = ("detection", "tracking", "anchored", "ideal")
+_FEATURE_COLUMNS = [c for c in MEASUREMENT_COLUMNS if c not in ("frame", "t_s", "source", "found", "reason", "confidence")]
+
+
+@dataclass
+class Measurements:
+    """Measurement rows of a run, with timing and the frames that could not be used."""
+
+    source: str
+    columns: dict
+    flagged: list = field(default_factory=list)     # (frame, reason) of unusable frames
+    analysis_s: float = 0.0                          # time in the image analysis proper
+    wall_s: float = 0.0                              # wall time including decoding
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.columns["frame"])
+
+    @property
+    def n_found(self) -> int:
+        return int(np.sum(self.columns["found"]))
+
+
+class _Rows:
+    """Accumulates one row per frame in the measurement schema."""
+
+    def __init__(self, source: str):
+        self.source = source
+        self.rows: list[dict] = []
+
+    def add(self, frame: int, t_s: float, values: dict | None, found: bool, reason: str, confidence: float):
+        row = {c: np.nan for c in _FEATURE_COLUMNS}
+        if values:
+            row.update({k: v for k, v in values.items() if k in row})
+        row.update(frame=frame, t_s=t_s, source=self.source, found=int(bool(found)), reason=reason,
+                   confidence=confidence)
+        self.rows.append(row)
+
+    def columns(self) -> dict:
+        return {c: [row[c] for row in self.rows] for c in MEASUREMENT_COLUMNS}
+
+
+def _progress(done: int, total: int, start: float, label: str) -> None:
+    if not sys.stderr.isatty() and done not in (total,) and done % 200:
+        return
+    elapsed = time.perf_counter() - start
+    rate = done / elapsed if elapsed > 0 else 0.0
+    width = 30
+    filled = int(width * done / max(total, 1))
+    end = "\n" if done == total else "\r"
+    print(f"{label} [{'#' * filled}{'.' * (width - filled)}] {done}/{total} frames, {rate:5.1f} fps",
+          end=end, file=sys.stderr, flush=True)
+
+
+def _measure_ideal(source) -> Measurements:
+    if source.labels is None:
+        raise ValueError(f"{source.name}: --source ideal needs labels.csv in the input folder")
+    labels = source.labels
+    rows = _Rows("ideal")
+    for i in range(labels.n_rows):
+        values = {c: labels[c][i] for c in LABEL_COLUMNS if c in labels and c not in ("frame", "t_s")}
+        for corner in ("near_left", "near_right", "far_left", "far_right"):
+            if labels[f"{corner}_visible"][i] < 0.5:       # an ideal sensor only sees what is in the image
+                values[f"{corner}_u_px"] = values[f"{corner}_v_px"] = np.nan
+        rows.add(i, float(source.times_s[i]), values, True, "", 1.0)
+    return Measurements("ideal", rows.columns())
+
+
+def _measure_detection(source, params, quiet) -> Measurements:
+    from visland.detection import DetectorParams, detect_runway
+    params = params or DetectorParams()
+    rows = _Rows("detection")
+    flagged = []
+    previous = None
+    analysis = 0.0
+    start = time.perf_counter()
+    for index, image, reason in source.frames(gray=True):
+        t = float(source.times_s[index])
+        if image is None:
+            rows.add(index, t, None, False, reason, 0.0)
+            flagged.append((index, reason))
+            previous = None
+        else:
+            tic = time.perf_counter()
+            result = detect_runway(image, source.camera, float(source.inertial.roll_rad[index]),
+                                   float(source.inertial.pitch_rad[index]), params=params, previous=previous)
+            analysis += time.perf_counter() - tic
+            row = result.to_measurement_row()
+            rows.add(index, t, row, result.found, result.reason, result.confidence)
+            previous = result if result.found else None
+        if not quiet:
+            _progress(index + 1, len(source), start, "detect")
+    return Measurements("detection", rows.columns(), flagged, analysis, time.perf_counter() - start)
+
+
+def _measure_tracking(source, anchored, init, quiet) -> Measurements:
+    from visland.tracking import track_source
+    start = time.perf_counter()
+    result = track_source(source, anchor=anchored, init=init,
+                          progress=None if quiet else (lambda done, total: _progress(done, total, start, "track")))
+    return Measurements("anchored" if anchored else "tracking", result.columns, result.flagged,
+                        result.analysis_s, time.perf_counter() - start)
+
+
+def measure(source, kind: str = "detection", detector_params=None, init=None, quiet: bool = False) -> Measurements:
+    """Measure every frame of ``source`` with ``kind`` (one of :data:`SOURCES`)."""
+    if kind not in SOURCES:
+        raise ValueError(f"--source must be one of {', '.join(SOURCES)}, got '{kind}'")
+    if kind == "ideal":
+        return _measure_ideal(source)
+    if source.inertial is None:
+        raise ValueError(f"{source.name}: telemetry is needed to analyse frames (roll and pitch fix the horizon)")
+    if kind == "detection":
+        return _measure_detection(source, detector_params, quiet)
+    return _measure_tracking(source, kind == "anchored", init, quiet)

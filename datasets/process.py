@@ -1,0 +1,227 @@
+"""``visland process``: frames (a folder or a video) plus telemetry in; measurements, estimates,
+metrics and a report out.
+
+The output folder is self-contained, so any stage can be rerun on it (for example
+``visland estimate OUT --measurements OUT/measurements.csv --observer all --out ...``)::
+
+    OUT/measurements.csv   image measurements (SPEC labels schema + source, found, reason, confidence)
+    OUT/estimates.csv      one row per observer per frame
+    OUT/metrics.json       with truth: the seeds' metrics per observer (dH) and dY, dX errors
+    OUT/run.json           what was run: input, source, scenario, frames used and flagged, throughput
+    OUT/report.html        self-contained report with plots
+    OUT/camera.json, OUT/telemetry.csv, OUT/truth.csv   copies of the inputs the estimates used
+
+The folder is built aside and moved into place when complete; an existing OUT is refused
+unless ``--force``.
+"""
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from visland import __version__
+from visland.contracts import MEASUREMENT_COLUMNS, atomic_write_text, staged_output_dir, write_csv
+
+__all__ = ["ProcessOptions", "process_input", "DEFAULT_OBSERVERS"]
+
+#: Every observer of the seeds (SPEC names).
+DEFAULT_OBSERVERS = ("oj-2p", "ii-2p", "cccs-2p", "ccpi-hg-2p", "ccpi-hosm-2p", "cccj-2p", "kf-2p",
+                     "oj-2l", "ii-2l", "ccpi-2l", "cccj-2l", "ekf-2l", "ecc-hg", "ecc-hosm")
+FT_TO_M = 0.3048
+
+
+@dataclass(frozen=True)
+class ProcessOptions:
+    """What ``visland process`` does (see its --help)."""
+
+    source: str = "detection"
+    observers: tuple = DEFAULT_OBSERVERS
+    camera: str | None = None
+    telemetry: str | None = None
+    frames_csv: str | None = None
+    fps: float | None = None
+    initial_height_m: float | None = None
+    initial_error: float = 0.2
+    init: str | None = None          # tracking designation: "labels" or "u,v;u,v"
+    report: bool = True
+    quiet: bool = False
+    params_file: str | None = None
+
+    def __post_init__(self):
+        from visland.datasets.measure import SOURCES
+        if self.source not in SOURCES:
+            raise ValueError(f"--source must be one of {', '.join(SOURCES)}, got '{self.source}'")
+        if not self.observers:
+            raise ValueError("--observer: give at least one observer name")
+        if self.fps is not None and not (math.isfinite(self.fps) and self.fps > 0):
+            raise ValueError(f"--fps must be a positive number, got {self.fps!r}")
+
+
+def _scenario_of(source) -> str | None:
+    """Scenario name from a generated dataset's manifest, if any."""
+    root = Path(source.name)
+    manifest = (root if root.is_dir() else root.parent) / "manifest.json"
+    if manifest.exists():
+        try:
+            data = json.loads(manifest.read_text())
+        except json.JSONDecodeError:
+            return None
+        scenario = data.get("scenario")
+        if isinstance(scenario, dict):
+            return scenario.get("name")
+        if isinstance(scenario, str):
+            return scenario
+    return None
+
+
+def _deviation_errors(truth, estimates_path: Path) -> dict:
+    """dY and dX errors (truth - estimate) at 400/200/100 ft per observer."""
+    from visland.contracts import read_estimates
+    from visland.datasets.compare import error_at_height_of
+    estimates = read_estimates(estimates_path)
+    out = {}
+    for observer in dict.fromkeys(estimates["observer"]):
+        keep = estimates["observer"] == observer
+        entry = {}
+        for column, label in (("dy_m", "dY"), ("dx_m", "dX")):
+            for h in (400.0, 200.0, 100.0):
+                entry[f"{label}_err_{h:.0f}ft_m"] = error_at_height_of(truth["dh_m"], truth[column],
+                                                                      estimates[column][keep], h * FT_TO_M)
+        out[observer] = entry
+    return out
+
+
+def _clean(value):
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def process_input(input_path, out_dir, options: ProcessOptions | None = None, force: bool = False,
+                  echo=print) -> dict:
+    """Run the whole offline pipeline on ``input_path`` into ``out_dir``; return run.json's content."""
+    from visland.contracts import read_measurements
+    from visland.datasets.measure import measure
+    from visland.datasets.sources import open_source
+    from visland.estimation.command import EstimateOptions, estimate_folder
+
+    options = options or ProcessOptions()
+    started = time.perf_counter()
+    source = open_source(input_path, camera=options.camera, telemetry=options.telemetry,
+                         frames_csv=options.frames_csv, fps=options.fps)
+    if source.truth is None and options.initial_height_m is None:
+        raise ValueError(f"{input_path}: no truth.csv, so give the initial height guess with --initial-height M")
+    estimate_options = EstimateOptions(observers=tuple(options.observers), measurements="(set below)",
+                                       initial_height_m=options.initial_height_m,
+                                       initial_error=options.initial_error, params_file=options.params_file)
+    echo(f"{source.name}: {len(source)} frames of {source.camera.width}x{source.camera.height}, "
+         f"{source.times_s[-1] - source.times_s[0]:.1f} s; measuring with {options.source}")
+    measurements = measure(source, options.source, init=options.init, quiet=options.quiet)
+    with staged_output_dir(out_dir, force=force) as staging:
+        write_csv(staging / "measurements.csv", measurements.columns, MEASUREMENT_COLUMNS)
+        source.camera.save(staging / "camera.json")
+        write_csv(staging / "telemetry.csv", dict(source.telemetry), source.telemetry.column_order)
+        if source.truth is not None:
+            write_csv(staging / "truth.csv", dict(source.truth), source.truth.column_order)
+        if source.runway_json is not None:
+            shutil.copyfile(source.runway_json, staging / "runway.json")
+        read_measurements(staging / "measurements.csv")       # what we hand on reads back cleanly
+        metrics = estimate_folder(staging, _with_measurements(estimate_options, staging / "measurements.csv"),
+                                  staging / "estimates.csv",
+                                  echo=lambda line: echo(line.replace(str(staging), str(out_dir))))
+        deviations = _deviation_errors(source.truth, staging / "estimates.csv") if source.truth is not None else {}
+        if metrics:
+            doc = json.loads((staging / "metrics.json").read_text())
+            doc["source"] = options.source
+            doc["scenario"] = _scenario_of(source)
+            doc["deviations"] = _clean(deviations)
+            atomic_write_text(staging / "metrics.json", json.dumps(doc, indent=2) + "\n")
+        wall = time.perf_counter() - started
+        n = measurements.n_frames
+        run = {
+            "software": f"visland {__version__}",
+            "input": str(input_path),
+            "source": options.source,
+            "scenario": _scenario_of(source),
+            "observers": list(options.observers),
+            "n_frames": n,
+            "n_found": measurements.n_found,
+            "n_flagged": len(measurements.flagged),
+            "flagged": [{"frame": int(i), "reason": r} for i, r in measurements.flagged],
+            "throughput": {
+                "measure_wall_s": measurements.wall_s,
+                "analysis_s": measurements.analysis_s,
+                "fps_with_decoding": n / measurements.wall_s if measurements.wall_s > 0 else None,
+                "fps_analysis_only": n / measurements.analysis_s if measurements.analysis_s > 0 else None,
+                "total_wall_s": wall,
+            },
+        }
+        atomic_write_text(staging / "run.json", json.dumps(_clean(run), indent=2) + "\n")
+        if options.report:
+            _write_report(staging, source, measurements, metrics, deviations, run)
+    _print_summary(run, metrics, deviations, out_dir, echo)
+    return run
+
+
+def _with_measurements(options, path):
+    return replace(options, measurements=str(path))
+
+
+def _write_report(folder: Path, source, measurements, metrics, deviations, run) -> None:
+    from visland.contracts import read_estimates
+    from visland.datasets.report import write_report
+    estimates = read_estimates(folder / "estimates.csv")
+    columns = {k: np.asarray(v) if k in ("source", "reason") else np.asarray(v, dtype=float)
+               for k, v in measurements.columns.items()}
+    merged = {}
+    for observer, values in (metrics or {}).items():
+        merged[observer] = {"conv. 5 % (s)": values.get("conv_time_5pct_s")}
+        merged[observer].update({f"dH @ {h} ft (m)": values.get(f"err_{h}ft_m") for h in (400, 200, 100)})
+        merged[observer].update({f"{q} @ 100 ft (m)": deviations.get(observer, {}).get(f"{q}_err_100ft_m")
+                                 for q in ("dY", "dX")})
+    throughput = run["throughput"]
+    summary = [
+        ("input", run["input"]), ("scenario", run["scenario"] or "-"), ("measurements", run["source"]),
+        ("frames", f"{run['n_frames']} ({run['n_found']} with the runway found, {run['n_flagged']} unusable)"),
+        ("throughput", "-" if not throughput["fps_with_decoding"] else
+         f"{throughput['fps_with_decoding']:.1f} frames/s with decoding, "
+         f"{throughput['fps_analysis_only']:.1f} frames/s analysis only"),
+        ("observers", ", ".join(run["observers"])),
+    ]
+    write_report(folder / "report.html", title=f"visland run: {run['scenario'] or Path(run['input']).name} "
+                                               f"({run['source']})",
+                 summary_rows=summary, measurements=columns, estimates=dict(estimates),
+                 truth=dict(source.truth) if source.truth is not None else None,
+                 labels=dict(source.labels) if source.labels is not None else None, camera=source.camera,
+                 metrics=merged or None, flagged=measurements.flagged)
+
+
+def _print_summary(run, metrics, deviations, out_dir, echo) -> None:
+    t = run["throughput"]
+    echo(f"{run['n_frames']} frames: runway found in {run['n_found']}, {run['n_flagged']} unusable; "
+         f"{t['fps_with_decoding'] or 0:.1f} frames/s with decoding, {t['fps_analysis_only'] or 0:.1f} frames/s "
+         f"analysis only")
+    if metrics:
+        echo(f"{'observer':14s} {'conv 5% s':>9s} {'dH@400ft':>9s} {'dH@200ft':>9s} {'dH@100ft':>9s} "
+             f"{'dY@100ft':>9s} {'dX@100ft':>9s}")
+        for observer, m in metrics.items():
+            d = deviations.get(observer, {})
+
+            def f(v):
+                return f"{v:9.3f}" if v is not None and math.isfinite(v) else f"{'-':>9s}"
+            echo(f"{observer:14s} {f(m.get('conv_time_5pct_s'))} {f(m.get('err_400ft_m'))} {f(m.get('err_200ft_m'))} "
+                 f"{f(m.get('err_100ft_m'))} {f(d.get('dY_err_100ft_m'))} {f(d.get('dX_err_100ft_m'))}")
+    echo(f"wrote {out_dir}/: measurements.csv estimates.csv run.json"
+         + (" metrics.json" if metrics else "") + " report.html")
