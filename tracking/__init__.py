@@ -1,1 +1,35 @@
-"""visland.tracking stage (see the module list in its README section)."""
+"""visland.tracking: a template point tracker (thesis 5.3.2.1, "Memo"), its drift, and its remedies.
+
+A pilot designates points once (the runway corners); the tracker finds them again in every
+frame by normalised cross-correlation around a predicted position. Re-cutting the template
+from the new frame (the update policy) is what makes the thesis's drift; two remedies the
+thesis names are built in: several points that must move as one rigid runway (a drifting one
+shows), and re-anchoring on a detector's corners.
+
+Public API::
+
+    from visland.tracking import PointTracker, TrackerParams, Attitude
+    tracker = PointTracker(camera, TrackerParams(update_policy="every_frame"))
+    step = tracker.start(gray0, {"near_left": (u, v), "near_right": (u, v)}, attitude0)
+    step = tracker.step(gray1, attitude1, anchor=None)      # TrackStep: per-point status, uv, score, reason
+
+Modules (each one idea):
+
+- :mod:`~visland.tracking.params`: :class:`TrackerParams` (the update policies are documented here).
+- :mod:`~visland.tracking.template`: cut, texture, warp and match a template (pure functions).
+- :mod:`~visland.tracking.motion`: inertial attitude, rotation prediction, virtual-to-pixel homography.
+- :mod:`~visland.tracking.rigid`: do the points move as one rigid runway would? (drift detection)
+- :mod:`~visland.tracking.anchoring`: anchor observations and providers (labels, detector).
+- :mod:`~visland.tracking.tracker`: :class:`PointTracker`, the stateful tracker.
+- :mod:`~visland.tracking.measurements`: tracker steps as ``measurements.csv`` rows; designations.
+- :mod:`~visland.tracking.run`: track a frame folder (``visland track``).
+- :mod:`~visland.tracking.synthetic`: flat textured world through a homography (tests, speed bench).
+- :mod:`~visland.tracking.bench`: ``visland bench track``.
+"""
+from visland.tracking.anchoring import AnchorObservation
+from visland.tracking.motion import Attitude
+from visland.tracking.params import INCONSISTENT_ACTIONS, UPDATE_POLICIES, TrackerParams
+from visland.tracking.tracker import MEASURED_STATUSES, POINT_STATUSES, PointReport, PointTracker, TrackStep
+
+__all__ = ["PointTracker", "TrackerParams", "TrackStep", "PointReport", "Attitude", "AnchorObservation",
+           "UPDATE_POLICIES", "INCONSISTENT_ACTIONS", "POINT_STATUSES", "MEASURED_STATUSES"]

@@ -1,0 +1,108 @@
+"""The rigid ground-plane motion check against closed-form projections of known ground points."""
+import math
+
+import numpy as np
+
+from visland.camera import CameraModel
+from visland.frames import R_camera_from_runway
+from visland.tracking.motion import Attitude, R_camera_from_level, virtual_to_pixel_homography
+from visland.tracking.rigid import check_consistency, fit_plane_motion
+
+CAMERA = CameraModel.default(1024)
+POINTS_R = np.array([[0.0, -22.5, 0.0], [0.0, 22.5, 0.0], [3000.0, -22.5, 0.0], [3000.0, 22.5, 0.0],
+                     [1500.0, -22.5, 0.0], [1500.0, 22.5, 0.0]])
+
+
+def view(c_runway_m, roll_deg, pitch_deg, dpsi_deg):
+    """Exact pixels of POINTS_R from camera centre c with the attitude relative to the runway."""
+    R = R_camera_from_runway(math.radians(roll_deg), math.radians(pitch_deg), math.radians(dpsi_deg),
+                             CAMERA.mount_rpy_rad)
+    uv, in_front = CAMERA.project((POINTS_R - np.asarray(c_runway_m)) @ R.T)
+    assert in_front.all()
+    return uv
+
+
+def level_homography(roll_deg, pitch_deg, heading_deg, heading_reference_deg):
+    attitude = Attitude(math.radians(roll_deg), math.radians(pitch_deg), math.radians(heading_deg))
+    R = R_camera_from_level(attitude, math.radians(heading_reference_deg), CAMERA)
+    return virtual_to_pixel_homography(R, CAMERA)
+
+
+def test_ground_points_follow_the_closed_form_motion():
+    runway_heading = 40.0
+    c0, ck = np.array([-4000.0, 150.0, -220.0]), np.array([-1500.0, 40.0, -95.0])
+    uv0 = view(c0, 2.0, 1.0, 5.0)
+    uvk = view(ck, -3.0, 2.5, -2.0)
+    # level frame of the designation = runway axes turned by the heading at frame 0 (dpsi_0 = 5 deg)
+    G0 = level_homography(2.0, 1.0, runway_heading + 5.0, runway_heading + 5.0)
+    Gk = level_homography(-3.0, 2.5, runway_heading - 2.0, runway_heading + 5.0)
+    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
+    q = q[:, :2] / q[:, 2:3]
+    result = check_consistency(q, uvk, Gk, threshold_px=0.5)
+    assert result.checked and result.decided and result.consistent.all()
+    assert np.max(result.residual_px) < 1e-6
+    # closed form: s = dH0 / dHk, b = (c0 - ck)_xy / dHk in the level axes of frame 0
+    assert math.isclose(result.motion.scale, 220.0 / 95.0, rel_tol=1e-9)
+    a = math.radians(5.0)
+    R_level_from_runway = np.array([[math.cos(a), math.sin(a)], [-math.sin(a), math.cos(a)]])
+    np.testing.assert_allclose(result.motion.shift, R_level_from_runway @ (c0 - ck)[:2] / 95.0, atol=1e-9)
+
+
+def test_one_drifting_point_is_singled_out():
+    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-1200.0, 20.0, -70.0])
+    uv0, uvk = view(c0, 0.0, 1.0, 3.0), view(ck, 1.0, 2.0, 1.0)
+    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
+    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
+    q = q[:, :2] / q[:, 2:3]
+    drifted = uvk.copy()
+    drifted[1] += [4.0, -3.0]                   # P'' slid 5 px
+    result = check_consistency(q, drifted, Gk, threshold_px=2.0)
+    assert result.decided
+    np.testing.assert_array_equal(result.consistent, [True, False, True, True, True, True])
+    assert math.isclose(result.residual_px[1], 5.0, rel_tol=0.05)
+    # the others still give the motion, so the drifted point's rigid prediction is its true place
+    np.testing.assert_allclose(result.motion.pixels(q[1], Gk), uvk[1], atol=1e-6)
+
+
+def test_two_points_that_disagree_cannot_be_told_apart():
+    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-1200.0, 20.0, -70.0])
+    uv0, uvk = view(c0, 0.0, 1.0, 3.0)[:2], view(ck, 1.0, 2.0, 1.0)[:2]
+    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
+    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(2)]).T).T
+    q = q[:, :2] / q[:, 2:3]
+    ok = check_consistency(q, uvk, Gk, threshold_px=1.0)
+    assert ok.checked and ok.decided and ok.consistent.all()
+    drifted = uvk.copy()
+    drifted[1, 1] += 6.0                      # across the threshold line: the segment turns
+    bad = check_consistency(q, drifted, Gk, threshold_px=1.0)
+    assert bad.checked and not bad.decided and not bad.consistent.any()
+
+
+def test_edge_points_may_slide_along_their_edge():
+    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-1200.0, 20.0, -70.0])
+    uv0, uvk = view(c0, 0.0, 1.0, 3.0), view(ck, 1.0, 2.0, 1.0)
+    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
+    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
+    q = q[:, :2] / q[:, 2:3]
+    # points 4 and 5 are edge points: their normals are across the edge lines through the corners
+    normals = [None] * 4
+    for near, far in ((0, 2), (1, 3)):
+        d = uvk[far] - uvk[near]
+        normals.append(np.array([-d[1], d[0]]) / np.hypot(*d))
+    slid = uvk.copy()
+    for k, (near, far) in zip((4, 5), ((0, 2), (1, 3))):
+        d = (uvk[far] - uvk[near]) / np.hypot(*(uvk[far] - uvk[near]))
+        slid[k] += 7.0 * d                       # along the edge: the aperture problem, not an error
+    result = check_consistency(q, slid, Gk, threshold_px=0.5, normals=normals)
+    assert result.decided and result.consistent.all()
+    across = slid.copy()
+    across[4] += 3.0 * normals[4]
+    flagged = check_consistency(q, across, Gk, threshold_px=0.5, normals=normals)
+    assert not flagged.consistent[4] and flagged.consistent[[0, 1, 2, 3, 5]].all()
+
+
+def test_too_few_equations_are_not_checked():
+    G = level_homography(0.0, 1.0, 0.0, 0.0)
+    assert fit_plane_motion([[0.1, 0.2]], [[500.0, 600.0]], G) is None
+    result = check_consistency([[0.1, 0.2]], [[500.0, 600.0]], G, threshold_px=1.0)
+    assert result.motion is None and not result.checked

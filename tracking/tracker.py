@@ -1,0 +1,627 @@
+"""The template point tracker: N designated points followed frame to frame (thesis 5.3.2.1).
+
+A pilot designates points once (the runway corners, or any ground points with texture);
+:class:`PointTracker` then finds each one again in every new frame:
+
+1. *Prediction*: the last position turned by the camera rotation between the two frames
+   (inertial attitude, :func:`visland.tracking.motion.rotation_homography`) plus the last
+   frame's remaining image motion; a point that could not be matched last frame is put
+   where the rigid ground-plane motion of the other points puts it
+   (:mod:`visland.tracking.rigid`).
+2. *Matching*: normalised cross-correlation of the point's template in a window of
+   ``search_radius_px`` around the prediction, sub-pixel peak
+   (:func:`visland.tracking.template.match_in_window`). The template is the reference
+   cut at the last update, warped by the predicted ground-plane motion when
+   ``scale_adaptation`` is on.
+3. *Loss*: a refused match (low score, two similar peaks, peak on the window border) leaves
+   the point *coasting* on its prediction, not measured; after ``max_coast_frames`` it is
+   *lost*. A lost point is only searched for again around the rigid prediction from the
+   other points, or re-anchored by a detector; never taken from a far-away match.
+4. *Anchoring* (optional): a confident detected corner close to the tracked point replaces
+   it (:mod:`visland.tracking.anchoring`).
+5. *Consistency*: the measured points must follow one ground-plane motion; those that do not
+   are flagged, re-projected or dropped (``on_inconsistent``).
+6. *Template update*: by ``update_policy`` (:mod:`visland.tracking.params`: this makes the
+   drift).
+
+Every frame returns a :class:`TrackStep` with each point's status, position, score and the
+reason for anything unusual. Pixels follow :mod:`visland.camera` (``(0, 0)`` the centre of the
+top-left pixel, u right, v down).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from visland.camera import CameraModel
+from visland.runway import CORNER_NAMES
+from visland.tracking.anchoring import AnchorObservation
+from visland.tracking.motion import (Attitude, R_camera_from_level, rotation_homography,
+                                     virtual_to_pixel_homography)
+from visland.tracking.params import TrackerParams
+from visland.tracking.rigid import PlaneMotion, check_consistency
+from visland.tracking.template import (ReferencePatch, Texture, apply_homography, cut_reference, homography_jacobian,
+                                       match_in_window, patch_texture, template_from_reference)
+
+__all__ = ["PointTracker", "PointReport", "TrackStep", "MEASURED_STATUSES", "POINT_STATUSES"]
+
+#: Per-point statuses of a frame. Measured ones carry a position in the outputs.
+POINT_STATUSES = ("designated", "tracked", "anchored", "reprojected", "inconsistent",
+                  "coasting", "lost", "refused", "skipped")
+MEASURED_STATUSES = frozenset({"designated", "tracked", "anchored", "reprojected", "inconsistent"})
+
+
+@dataclass(frozen=True)
+class PointReport:
+    """One point in one frame.
+
+    ``uv`` (2,) is the measured pixel position (NaN unless ``measured``); ``score`` the
+    correlation of the accepted or refused match (NaN if none); ``residual_px`` the distance
+    to the rigid ground-plane motion of the points (NaN if not checked); ``reason`` says what
+    was unusual (empty when tracked normally).
+    """
+
+    name: str
+    status: str
+    uv: np.ndarray
+    score: float
+    residual_px: float
+    reason: str
+
+    @property
+    def measured(self) -> bool:
+        return self.status in MEASURED_STATUSES
+
+
+@dataclass(frozen=True)
+class TrackStep:
+    """Everything the tracker says about one frame."""
+
+    frame_index: int
+    points: tuple
+    motion: PlaneMotion | None = None
+    consistency_checked: bool = False
+    anchor: AnchorObservation | None = None
+    note: str = ""
+
+    def point(self, name: str) -> PointReport:
+        for report in self.points:
+            if report.name == name:
+                return report
+        raise ValueError(f"no tracked point named '{name}' (points: {', '.join(p.name for p in self.points)})")
+
+    @property
+    def anchored(self) -> bool:
+        return any(p.status == "anchored" for p in self.points)
+
+    def reason(self) -> str:
+        """One line: the frame note, then each point that is not simply tracked, with why."""
+        parts = [self.note] if self.note else []
+        for p in self.points:
+            if p.status in ("tracked", "designated") and not p.reason:
+                continue
+            parts.append(f"{p.name} {p.status}" + (f" ({p.reason})" if p.reason else ""))
+        return "; ".join(parts)
+
+
+@dataclass
+class _Point:
+    """Mutable state of one tracked point."""
+
+    name: str
+    corner: str | None
+    status: str
+    uv: np.ndarray
+    reason: str = ""
+    velocity: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    reference: ReferencePatch | None = None
+    texture: Texture | None = None
+    cut_frame: int = 0
+    cut_R_camera_from_level: np.ndarray | None = None
+    cut_motion: PlaneMotion | None = None
+    cut_size_px: float = math.nan
+    q: np.ndarray | None = None
+    score: float = math.nan
+    residual_px: float = math.nan
+    coast_count: int = 0
+    pending_anchor: list = field(default_factory=list)
+
+    @property
+    def active(self) -> bool:
+        return self.status not in ("lost", "refused")
+
+    @property
+    def edge_normal(self):
+        return self.texture.normal if (self.texture is not None and self.texture.kind == "edge") else None
+
+
+class PointTracker:
+    """Tracks designated image points through a sequence of grey frames (see the module docstring).
+
+    Parameters
+    ----------
+    camera : :class:`visland.camera.CameraModel`
+        Image size, intrinsics and mounting (for the inertial prediction and the rigid check).
+    params : :class:`visland.tracking.TrackerParams`
+
+    Use :meth:`start` on the designation frame, then :meth:`step` on each next frame (or
+    :meth:`skip` for a frame that cannot be used). The inertial attitude is optional but
+    enables the rotation-compensated prediction, the template warp and the rigid check; give
+    it on every frame or on none.
+    """
+
+    def __init__(self, camera: CameraModel, params: TrackerParams | None = None):
+        if not isinstance(camera, CameraModel):
+            raise ValueError(f"camera must be a CameraModel, got {type(camera).__name__}")
+        params = params or TrackerParams()
+        if not isinstance(params, TrackerParams):
+            raise ValueError(f"params must be TrackerParams, got {type(params).__name__}")
+        self.camera = camera
+        self.params = params
+        self._points: list[_Point] = []
+        self._frame = -1
+        self._started = False
+        self._heading_reference = None
+        self._R_prev = None
+        self._motions: list[tuple[int, PlaneMotion]] = []
+        self._reference_half = int(math.ceil(1.5 * params.half_template_px)) + 1
+
+    # ----------------------------------------------------------------- public
+    @property
+    def point_names(self) -> tuple:
+        return tuple(p.name for p in self._points)
+
+    @property
+    def frame_index(self) -> int:
+        """Index of the last frame processed (-1 before :meth:`start`)."""
+        return self._frame
+
+    def start(self, image, designations, attitude: Attitude | None = None, frame_index: int = 0) -> TrackStep:
+        """Designate the points on the first frame.
+
+        Parameters
+        ----------
+        image : ndarray, shape (height, width), uint8 grey.
+        designations : mapping name -> (u, v), or sequence of (name, (u, v)). Names in
+            :data:`visland.runway.CORNER_NAMES` mark runway corners (which a detector can
+            re-anchor); other names are free.
+        attitude : inertial attitude at this frame (sets the level frame of the rigid check).
+        frame_index : index of this frame in the sequence.
+
+        Each point is refused, with its reason, if it lies outside the image, too close to the
+        border for its template, or on a featureless patch. Raises ValueError if no point is
+        usable or the arguments are malformed.
+        """
+        image = self._check_image(image, strict=True)
+        items = list(designations.items()) if isinstance(designations, dict) else list(designations)
+        if not items:
+            raise ValueError("designations is empty: give at least one point to track")
+        names = [str(name) for name, _ in items]
+        if len(set(names)) != len(names):
+            raise ValueError(f"designations name a point twice: {', '.join(names)}")
+        if isinstance(frame_index, bool) or not isinstance(frame_index, (int, np.integer)) or frame_index < 0:
+            raise ValueError(f"frame_index must be a non-negative integer, got {frame_index!r}")
+        self._frame = int(frame_index)
+        self._points = []
+        self._motions = []
+        R_now = None
+        if attitude is not None:
+            self._heading_reference = float(attitude.heading_rad)
+            R_now = R_camera_from_level(attitude, self._heading_reference, self.camera)
+        else:
+            self._heading_reference = None
+        self._R_prev = R_now
+        G_now = virtual_to_pixel_homography(R_now, self.camera) if R_now is not None else None
+        for name, uv in items:
+            point = self._designate(image, str(name), uv)
+            self._points.append(point)
+        usable = [p for p in self._points if p.status == "designated"]
+        if not usable:
+            raise ValueError("no designated point can be tracked: "
+                             + "; ".join(f"{p.name}: {p.reason}" for p in self._points))
+        if G_now is not None:
+            G_inv = np.linalg.inv(G_now)
+            for p in usable:
+                p.q = apply_homography(G_inv, p.uv)
+            self._motions.append((self._frame, PlaneMotion(1.0, np.zeros(2))))
+        size = self._configuration_size([p.uv for p in usable])
+        for p in usable:
+            p.cut_R_camera_from_level = R_now
+            p.cut_motion = self._motions[-1][1] if self._motions else None
+            p.cut_size_px = size
+        self._started = True
+        return self._report(None, False, None, "designation")
+
+    def skip(self, reason: str, frame_index: int | None = None) -> TrackStep:
+        """Record a frame that cannot be used (unreadable, wrong size...): nothing is measured.
+
+        The points keep their state; the next :meth:`step` predicts over the gap.
+        """
+        self._require_started()
+        self._frame = self._next_index(frame_index)
+        reports = tuple(PointReport(p.name, "skipped" if p.active else p.status, np.full(2, np.nan), math.nan,
+                                    math.nan, p.reason if not p.active else "") for p in self._points)
+        return TrackStep(self._frame, reports, note=f"frame skipped: {reason}")
+
+    def step(self, image, attitude: Attitude | None = None, anchor: AnchorObservation | None = None,
+             frame_index: int | None = None) -> TrackStep:
+        """Track the points into a new frame.
+
+        Parameters
+        ----------
+        image : ndarray, shape (height, width), uint8 grey, the size of the designation frame.
+            A frame of another size is not used: the step reports it (as :meth:`skip`).
+        attitude : inertial attitude at this frame (if it was given at :meth:`start`).
+        anchor : corners found in this frame by a detector (optional re-anchoring).
+        frame_index : index of this frame (default: the previous one plus one); a gap means
+            frames were missed, and the prediction spans it.
+        """
+        self._require_started()
+        image, problem = self._check_image(image, strict=False)
+        if problem:
+            return self.skip(problem, frame_index)
+        index = self._next_index(frame_index)
+        gap = index - self._frame
+        self._frame = index
+        params = self.params
+        R_now = None
+        if attitude is not None and self._heading_reference is not None:
+            R_now = R_camera_from_level(attitude, self._heading_reference, self.camera)
+        G_now = virtual_to_pixel_homography(R_now, self.camera) if R_now is not None else None
+        H_rotation = None
+        if R_now is not None and self._R_prev is not None and params.use_inertial_prediction:
+            H_rotation = rotation_homography(R_now @ self._R_prev.T, self.camera)
+        motion_guess = self._extrapolated_motion(index) if G_now is not None else None
+
+        bases = {}
+        for p in self._points:
+            p.residual_px = math.nan
+            if p.status == "refused":
+                continue
+            if p.status == "lost":
+                self._search_lost(p, image, motion_guess, G_now, R_now)
+                continue
+            base = apply_homography(H_rotation, p.uv) if H_rotation is not None else p.uv.copy()
+            bases[p.name] = base
+            predicted = base + gap * p.velocity
+            if p.status == "coasting" and motion_guess is not None and p.q is not None:
+                predicted = motion_guess.pixels(p.q, G_now)
+            self._match(p, image, predicted, motion_guess, G_now, R_now)
+
+        note = ""
+        if anchor is not None:
+            note = self._apply_anchor(anchor, index)
+
+        motion, checked = None, False
+        if G_now is not None:
+            motion, checked, consistency_note = self._check_rigid(G_now)
+            if consistency_note:
+                note = "; ".join(x for x in (note, consistency_note) if x)
+            if motion is not None:
+                self._motions = (self._motions + [(index, motion)])[-2:]
+                for p in self._points:
+                    if p.q is None and p.status in MEASURED_STATUSES:
+                        p.q = motion.designation(apply_homography(np.linalg.inv(G_now), p.uv))
+                    if p.status == "coasting" and p.q is not None:
+                        p.uv = motion.pixels(p.q, G_now)
+
+        size = self._configuration_size([p.uv for p in self._points if p.status in MEASURED_STATUSES])
+        for p in self._points:
+            if p.status in ("tracked", "inconsistent") and p.name in bases:
+                p.velocity = (p.uv - bases[p.name]) / gap
+            if p.status in MEASURED_STATUSES:
+                self._maybe_update_template(p, image, index, R_now, motion, size, G_now)
+        self._R_prev = R_now
+        return self._report(motion, checked, anchor, note)
+
+    # ----------------------------------------------------------------- designation
+    def _designate(self, image, name: str, uv) -> _Point:
+        corner = name if name in CORNER_NAMES else None
+        try:
+            uv = np.asarray(uv, dtype=float).reshape(2)
+        except (TypeError, ValueError):
+            return _Point(name, corner, "refused", np.full(2, np.nan), reason=f"not a pixel position: {uv!r}")
+        if not np.all(np.isfinite(uv)):
+            return _Point(name, corner, "refused", np.full(2, np.nan), reason="designated position is not finite")
+        where = f"({uv[0]:.1f}, {uv[1]:.1f})"
+        if not self.camera.in_image(uv):
+            return _Point(name, corner, "refused", uv,
+                          reason=f"designated at {where}, outside the {self.camera.width}x{self.camera.height} image")
+        reference = cut_reference(image, uv, self._reference_half)
+        if reference is None:
+            return _Point(name, corner, "refused", uv,
+                          reason=f"designated at {where}, within {self._reference_half} px of the image border "
+                                 f"(no room for its template)")
+        texture = self._texture(reference)
+        if texture.kind == "featureless":
+            return _Point(name, corner, "refused", uv,
+                          reason=f"featureless patch at {where} (gradient {texture.strong:.1f} < "
+                                 f"{self.params.min_contrast:g} grey levels/px)")
+        point = _Point(name, corner, "designated", uv, reference=reference, texture=texture, cut_frame=self._frame)
+        if texture.kind == "edge":
+            point.reason = (f"edge point (texture {texture.weak:.1f} < {self.params.min_texture:g}): "
+                            "may slide along the edge")
+        return point
+
+    def _texture(self, reference: ReferencePatch) -> Texture:
+        big, half = reference.half_px, self.params.half_template_px
+        central = reference.pixels[big - half:big + half + 1, big - half:big + half + 1]
+        return patch_texture(central, self.params.min_texture, self.params.min_contrast)
+
+    # ----------------------------------------------------------------- matching
+    def _warp_reference_from_image(self, p: _Point, predicted, motion_guess, G_now, R_now):
+        """2x2 map of displacements now -> in the reference image, or None if unknown."""
+        if R_now is None or p.cut_R_camera_from_level is None:
+            return None
+        G_cut = virtual_to_pixel_homography(p.cut_R_camera_from_level, self.camera)
+        if motion_guess is not None and p.cut_motion is not None:
+            # pixels now -> designation coordinates -> pixels at the cut (module rigid)
+            S_cut = np.array([[p.cut_motion.scale, 0, p.cut_motion.shift[0]],
+                              [0, p.cut_motion.scale, p.cut_motion.shift[1]], [0, 0, 1.0]])
+            S_now_inv = np.array([[1.0, 0, -motion_guess.shift[0]], [0, 1.0, -motion_guess.shift[1]],
+                                  [0, 0, motion_guess.scale]]) / motion_guess.scale
+            H_cut_from_now = G_cut @ S_cut @ S_now_inv @ np.linalg.inv(G_now)
+        else:
+            H_cut_from_now = rotation_homography(p.cut_R_camera_from_level @ R_now.T, self.camera)
+        A = homography_jacobian(H_cut_from_now, predicted)
+        if not np.all(np.isfinite(A)) or abs(np.linalg.det(A)) < 1e-6:
+            return None
+        return A
+
+    def _match(self, p: _Point, image, predicted, motion_guess, G_now, R_now) -> None:
+        params = self.params
+        half = params.half_template_px
+        margin = half - params.border_margin_px
+        width, height = self.camera.width, self.camera.height
+        if not (np.all(np.isfinite(predicted)) and margin - 0.5 <= predicted[0] <= width - 0.5 - margin
+                and margin - 0.5 <= predicted[1] <= height - 0.5 - margin):
+            self._lose(p, f"left the image (predicted at ({predicted[0]:.0f}, {predicted[1]:.0f}))")
+            return
+        if p.reference is None:
+            self._lose(p, "no template (the last cut was featureless or at the border)")
+            return
+        A = self._warp_reference_from_image(p, predicted, motion_guess, G_now, R_now)
+        template, offset = template_from_reference(p.reference, params.template_size_px,
+                                                   A if params.scale_adaptation else None)
+        match = match_in_window(image, template, offset, predicted, params.search_radius_px, params.min_score,
+                                params.ambiguity_margin, params.ambiguity_distance_px, params.subpixel)
+        p.score = match.score
+        if match.found:
+            p.uv = match.uv
+            p.status = "tracked"
+            p.reason = ""
+            p.coast_count = 0
+            return
+        p.coast_count += 1
+        p.uv = np.asarray(predicted, dtype=float)
+        if p.coast_count > params.max_coast_frames:
+            self._lose(p, f"{match.reason}; no match for {p.coast_count} frames")
+        else:
+            p.status = "coasting"
+            p.reason = f"{match.reason}; coasting {p.coast_count}/{params.max_coast_frames}"
+
+    def _lose(self, p: _Point, reason: str) -> None:
+        p.status = "lost"
+        p.reason = reason
+        p.velocity = np.zeros(2)
+
+    def _search_lost(self, p: _Point, image, motion_guess, G_now, R_now) -> None:
+        """Look for a lost point only where the other points' rigid motion puts it."""
+        if motion_guess is None or p.q is None or p.reference is None:
+            return
+        predicted = motion_guess.pixels(p.q, G_now)
+        half = self.params.half_template_px
+        if not (np.all(np.isfinite(predicted)) and half <= predicted[0] <= self.camera.width - 1 - half
+                and half <= predicted[1] <= self.camera.height - 1 - half):
+            return
+        A = self._warp_reference_from_image(p, predicted, motion_guess, G_now, R_now)
+        template, offset = template_from_reference(p.reference, self.params.template_size_px,
+                                                   A if self.params.scale_adaptation else None)
+        match = match_in_window(image, template, offset, predicted, self.params.search_radius_px,
+                                self.params.min_score, self.params.ambiguity_margin, self.params.ambiguity_distance_px,
+                                self.params.subpixel)
+        if match.found:
+            p.uv = match.uv
+            p.score = match.score
+            p.status = "tracked"
+            p.coast_count = 0
+            p.reason = f"re-acquired {np.hypot(*(match.uv - predicted)):.1f} px from the rigid prediction"
+
+    # ----------------------------------------------------------------- anchoring
+    def _apply_anchor(self, anchor: AnchorObservation, index: int) -> str:
+        params = self.params
+        if not anchor.found:
+            for p in self._points:
+                p.pending_anchor = []
+            return f"anchor: none ({anchor.reason})" if anchor.reason else "anchor: none"
+        if anchor.confidence < params.anchor_min_confidence:
+            for p in self._points:
+                p.pending_anchor = []
+            return f"anchor: not used (confidence {anchor.confidence:.2f} < {params.anchor_min_confidence:.2f})"
+        for p in self._points:
+            if p.corner is None:
+                continue
+            detected = anchor.corner(p.corner)
+            if detected is None:
+                p.pending_anchor = []
+                continue
+            has_position = p.status in MEASURED_STATUSES or p.status == "coasting"
+            distance = float(np.hypot(*(detected - p.uv))) if has_position else math.inf
+            if distance <= params.anchor_gate_px:
+                self._anchor_point(p, detected, f"anchored {distance:.1f} px from the track")
+                continue
+            # a chain of detections on consecutive frames, each within the gate of the one before
+            pending = list(p.pending_anchor)
+            if pending and (pending[-1][0] != index - 1
+                            or np.hypot(*(detected - pending[-1][1])) > params.anchor_gate_px):
+                pending = []
+            pending.append((index, detected))
+            p.pending_anchor = pending[-params.anchor_confirm_frames:]
+            if len(p.pending_anchor) >= params.anchor_confirm_frames:
+                where = f"{distance:.0f} px from the track" if has_position else f"while {p.status}"
+                self._anchor_point(p, detected, f"re-anchored {where} after {len(p.pending_anchor)} "
+                                               "agreeing detections")
+            else:
+                gap = f"{distance:.0f} px away" if has_position else f"found while {p.status}"
+                note = (f"detected corner {gap} (gate {params.anchor_gate_px:g} px): not followed yet "
+                        f"({len(p.pending_anchor)}/{params.anchor_confirm_frames})")
+                p.reason = f"{p.reason}; {note}" if p.reason else note
+        return ""
+
+    def _anchor_point(self, p: _Point, detected, reason: str) -> None:
+        p.uv = np.asarray(detected, dtype=float).copy()
+        p.status = "anchored"
+        p.reason = reason
+        p.coast_count = 0
+        p.pending_anchor = []
+        p.score = math.nan
+
+    # ----------------------------------------------------------------- rigid check
+    def _check_rigid(self, G_now):
+        params = self.params
+        members = [p for p in self._points if p.status in MEASURED_STATUSES and p.q is not None]
+        if len(members) < 2:
+            return None, False, ""
+        uv = np.array([p.uv for p in members])
+        q = np.array([p.q for p in members])
+        normals = [p.edge_normal for p in members]
+        threshold = params.consistency_threshold_px + params.consistency_threshold_fraction * \
+            self._configuration_size(uv)
+        result = check_consistency(q, uv, G_now, threshold, normals)
+        if result.motion is None:
+            return None, False, ""
+        for k, p in enumerate(members):
+            p.residual_px = float(result.residual_px[k])
+        if not result.checked:
+            return result.motion, False, ""
+        if not result.decided:
+            worst = float(np.nanmax(result.residual_px))
+            names = ", ".join(p.name for p in members)
+            return result.motion, True, (f"points {names} disagree with one rigid runway motion by up to "
+                                         f"{worst:.1f} px (> {threshold:.1f}); too few points to tell which drifts")
+        for k, p in enumerate(members):
+            if result.consistent[k]:
+                continue
+            residual = float(result.residual_px[k])
+            if p.status == "anchored":
+                # the detector is trusted over the designation: re-base the point on it
+                p.q = result.motion.designation(apply_homography(np.linalg.inv(G_now), p.uv))
+                p.reason += f"; designation re-based ({residual:.1f} px off the rigid motion)"
+                continue
+            text = f"{residual:.1f} px off the rigid motion of the others (> {threshold:.1f})"
+            if params.on_inconsistent == "flag":
+                p.status = "inconsistent"
+                p.reason = text
+            elif params.on_inconsistent == "reproject":
+                p.uv = result.motion.pixels(p.q, G_now)
+                p.status = "reprojected"
+                p.reason = text + "; moved onto it"
+            else:
+                self._lose(p, text + "; dropped")
+        return result.motion, True, ""
+
+    def _extrapolated_motion(self, index: int) -> PlaneMotion | None:
+        """Ground-plane motion at ``index`` extrapolated from the last two fits (constant rate)."""
+        if not self._motions:
+            return None
+        (k2, m2) = self._motions[-1]
+        if len(self._motions) < 2:
+            return m2
+        (k1, m1) = self._motions[-2]
+        ratio = (index - k2) / (k2 - k1)
+        scale = m2.scale * (m2.scale / m1.scale) ** ratio
+        shift = m2.shift + ratio * (m2.shift - m1.shift)
+        if not (math.isfinite(scale) and scale > 0 and np.all(np.isfinite(shift))):
+            return m2
+        return PlaneMotion(scale, shift)
+
+    # ----------------------------------------------------------------- template update
+    def _magnification(self, p: _Point, R_now, motion, G_now, size) -> float:
+        """How much the ground around the point has grown in the image since its reference was cut."""
+        if R_now is not None:
+            A = self._warp_reference_from_image(p, p.uv, motion, G_now, R_now)
+            if A is not None:
+                return 1.0 / math.sqrt(abs(float(np.linalg.det(A))))
+        if math.isfinite(size) and math.isfinite(p.cut_size_px) and p.cut_size_px > 0:
+            return size / p.cut_size_px
+        return 1.0
+
+    def _maybe_update_template(self, p: _Point, image, index, R_now, motion, size, G_now) -> None:
+        params = self.params
+        policy = params.update_policy
+        if p.status in ("anchored", "reprojected"):
+            cut = True          # the point moved: its old template is centred elsewhere
+        elif policy == "every_frame":
+            cut = True
+        elif policy == "every_n":
+            cut = index - p.cut_frame >= params.update_every_n
+        elif policy == "score_drop":
+            cut = math.isfinite(p.score) and p.score < params.update_score_below
+        elif policy == "scale_change":
+            magnification = self._magnification(p, R_now, motion, G_now, size)
+            cut = max(magnification, 1.0 / magnification) >= params.update_scale_ratio
+        else:
+            cut = False
+        if not cut:
+            return
+        reference = cut_reference(image, p.uv, self._reference_half)
+        if reference is None:
+            return          # too close to the border to cut: keep the previous reference
+        texture = self._texture(reference)
+        if texture.kind == "featureless":
+            p.reference = None
+            p.reason = (f"{p.reason}; " if p.reason else "") + "template cut here is featureless"
+            return
+        p.reference = reference
+        p.texture = texture
+        p.cut_frame = index
+        p.cut_R_camera_from_level = R_now
+        p.cut_motion = motion
+        p.cut_size_px = size
+
+    # ----------------------------------------------------------------- helpers
+    def _report(self, motion, checked, anchor, note) -> TrackStep:
+        reports = []
+        for p in self._points:
+            measured = p.status in MEASURED_STATUSES
+            reports.append(PointReport(p.name, p.status, p.uv.copy() if measured else np.full(2, np.nan),
+                                       float(p.score), float(p.residual_px), p.reason))
+        return TrackStep(self._frame, tuple(reports), motion, checked, anchor, note)
+
+    @staticmethod
+    def _configuration_size(uv_list) -> float:
+        """RMS distance of the points to their centroid, in pixels (NaN under two points)."""
+        uv = np.asarray([u for u in uv_list if np.all(np.isfinite(u))], dtype=float).reshape(-1, 2)
+        if len(uv) < 2:
+            return math.nan
+        return float(np.sqrt(np.mean(np.sum((uv - uv.mean(axis=0)) ** 2, axis=1))))
+
+    def _check_image(self, image, strict: bool):
+        """Validate a grey frame. strict: raise on any problem; else return (image, problem) for size problems."""
+        if not isinstance(image, np.ndarray):
+            raise ValueError(f"image must be a numpy array, got {type(image).__name__}")
+        if image.ndim != 2:
+            raise ValueError(f"image must be a 2-D grey image (height, width), got shape {image.shape}")
+        if image.dtype != np.uint8:
+            raise ValueError(f"image must be uint8 grey levels, got {image.dtype}")
+        expected = (self.camera.height, self.camera.width)
+        if image.shape != expected:
+            problem = (f"image is {image.shape[1]}x{image.shape[0]}, the tracker's camera is "
+                       f"{self.camera.width}x{self.camera.height}")
+            if strict:
+                raise ValueError(problem)
+            return image, problem
+        return image if strict else (image, "")
+
+    def _require_started(self):
+        if not self._started:
+            raise ValueError("the tracker has no points yet: call start(image, designations) first")
+
+    def _next_index(self, frame_index):
+        if frame_index is None:
+            return self._frame + 1
+        if isinstance(frame_index, bool) or not isinstance(frame_index, (int, np.integer)) or frame_index <= self._frame:
+            raise ValueError(f"frame_index must be an integer after the last frame {self._frame}, got {frame_index!r}")
+        return int(frame_index)
