@@ -13,6 +13,8 @@ Public API::
     step = tracker.start(gray0, {"near_left": (u, v), "near_right": (u, v)}, attitude0)
     step = tracker.step(gray1, attitude1, anchor=None)      # TrackStep: per-point status, uv, score, reason
 
+    run = track_source(FrameFolder(dir), init="labels", anchor=None)   # a whole folder -> run.columns
+
 Modules (each one idea):
 
 - :mod:`~visland.tracking.params`: :class:`TrackerParams` (the update policies are documented here).
@@ -22,14 +24,16 @@ Modules (each one idea):
 - :mod:`~visland.tracking.anchoring`: anchor observations and providers (labels, detector).
 - :mod:`~visland.tracking.tracker`: :class:`PointTracker`, the stateful tracker.
 - :mod:`~visland.tracking.measurements`: tracker steps as ``measurements.csv`` rows; designations.
-- :mod:`~visland.tracking.run`: track a frame folder (``visland track``).
+- :mod:`~visland.tracking.run`: track a frame folder or video source (``visland track``, ``visland process``).
 - :mod:`~visland.tracking.synthetic`: flat textured world through a homography (tests, speed bench).
 - :mod:`~visland.tracking.bench`: ``visland bench track``.
 """
 from visland.tracking.anchoring import AnchorObservation
 from visland.tracking.motion import Attitude
 from visland.tracking.params import INCONSISTENT_ACTIONS, UPDATE_POLICIES, TrackerParams
+from visland.tracking.run import TrackRun, track_source
 from visland.tracking.tracker import MEASURED_STATUSES, POINT_STATUSES, PointReport, PointTracker, TrackStep
 
 __all__ = ["PointTracker", "TrackerParams", "TrackStep", "PointReport", "Attitude", "AnchorObservation",
+           "track_source", "TrackRun",
            "UPDATE_POLICIES", "INCONSISTENT_ACTIONS", "POINT_STATUSES", "MEASURED_STATUSES"]

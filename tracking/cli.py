@@ -73,7 +73,7 @@ def _cmd_track(args) -> int:
     from visland.contracts import write_csv
     from visland.folder import FrameFolder
     from visland.tracking.params import TrackerParams
-    from visland.tracking.run import track_folder
+    from visland.tracking.run import track_source
 
     out = Path(args.out)
     if out.exists() and not args.force:
@@ -87,7 +87,7 @@ def _cmd_track(args) -> int:
         params = TrackerParams.from_dict({**params.to_dict(), "update_policy": args.policy}, source="--policy")
     folder = FrameFolder(args.folder, camera=args.camera, telemetry=args.telemetry, fps=args.fps,
                          require_telemetry=not args.no_inertial)
-    run = track_folder(folder, init=args.init, params=params, anchor=args.anchor, anchor_every=args.anchor_every,
+    run = track_source(folder, init=args.init, params=params, anchor=args.anchor, anchor_every=args.anchor_every,
                        start=args.start, edge_points=args.edge_points, use_inertial=not args.no_inertial)
     write_csv(out, run.columns, run.column_order)
     for line in summary_lines(run, folder.labels):

@@ -128,3 +128,29 @@ def test_bench_track_ends_with_a_json_line(capsys):
     assert figures["bench"] == "track" and figures["size"] == 256 and len(figures["fps_runs"]) == 2
     assert figures["fps_median"] > 0 and math.isfinite(figures["final_error_px_max"])
     assert figures["points_lost_at_end"] == 0
+
+
+def test_track_source_takes_any_frame_source(folder, approach):
+    """A source with frames() (as visland.datasets' sources): unusable frames are flagged, not dropped."""
+    from visland.folder import FrameFolder
+    from visland.tracking import track_source
+
+    class Source:
+        def __init__(self):
+            self.inner = FrameFolder(folder)
+            self.name, self.camera, self.times_s = "memory", self.inner.camera, self.inner.times_s
+            self.inertial, self.labels = self.inner.inertial, self.inner.labels
+
+        def __len__(self):
+            return len(self.inner)
+
+        def frames(self, gray=True):
+            for j, image in enumerate(approach.images):
+                yield (j, None, f"frame {j}: decoder error") if j == 4 else (j, image, None)
+
+    run = track_source(Source(), init=None, anchor=False, start=1)
+    assert run.flagged == [(4, "frame 4: decoder error")]
+    assert run.columns["found"][0] == 0 and run.columns["reason"][0] == "before the designation"
+    assert run.columns["found"][4] == 0 and "decoder error" in run.columns["reason"][4]
+    assert all(f == 1 for f in run.columns["found"][5:])
+    assert run.analysis_s > 0
