@@ -16,9 +16,14 @@ import time
 import numpy as np
 
 from visland.camera import CameraModel
-from visland.detection.horizon import horizon_frame
+from visland.detection.candidates import CandidateLines, candidate_lines, check_lines, hough_segments
+from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
+from visland.detection.refine import LineFit, PixelLine, refine_line
 from visland.detection.result import DetectionResult, not_found
+from visland.detection.transverse import find_transverse_line
+from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
+from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
 
 __all__ = ["detect_runway", "check_frame"]
 
@@ -87,7 +92,389 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     if not horizon.crosses_image(camera.width, camera.height, params.horizon_margin_px):
         return fail(f"horizon from roll {math.degrees(roll):.1f} deg, pitch {math.degrees(pitch):.1f} deg "
                     "lies outside the image")
-    return fail("runway search not implemented yet")
+    ground = horizon.ground_bbox(camera.width, camera.height, margin_px=2.0)
+    if ground is None:
+        return fail("no ground below the horizon in the image")
+    u0, v0, u1, v1 = ground
+    sample = image[v0:v1:4, u0:u1:4]
+    spread = float(np.percentile(sample, 99) - np.percentile(sample, 1)) if sample.size else 0.0
+    if spread < params.min_contrast:
+        return fail(f"frame has no contrast below the horizon (grey levels within {spread:.0f})")
+
+    context = _Context(image, camera, horizon, params, roll, pitch, start)
+    tracking_reason = None
+    if previous is not None and previous.found:
+        prediction, roi = _predict(previous, context, ground)
+        if prediction is None:
+            tracking_reason = "previous runway not in view after the attitude change"
+        else:
+            result, why = _search(context, roi, params.tracking_max_side_px, prediction, "tracking")
+            if result is not None:
+                return result
+            tracking_reason = why
+    mode = "acquisition" if tracking_reason is None else "reacquisition"
+    result, why = _search(context, ground, params.acquisition_max_side_px, None, mode)
+    if result is not None:
+        return result
+    if tracking_reason is not None:
+        why = f"{why} (tracking failed first: {tracking_reason})"
+    return fail(why)
+
+
+class _Context:
+    """What every step of one frame's search shares."""
+
+    def __init__(self, image, camera, horizon, params, roll, pitch, start):
+        self.image = image
+        self.camera = camera
+        self.horizon = horizon
+        self.params = params
+        self.roll = roll
+        self.pitch = pitch
+        self.start = start
+        horizon_rho, horizon_theta = horizon.rho, horizon.theta
+        self.horizon_line = (horizon_rho, horizon_theta)
+
+
+def _predict(previous: DetectionResult, ctx: _Context, ground):
+    """The previous runway carried into this frame: prediction and region of interest.
+
+    The camera's rotation between the two frames (roll and pitch from the inertial unit; the
+    heading change is unknown and taken as zero) moves every image point by the homography
+    ``H = K R_now R_before^T K^-1``; the translation over one frame is left to the search band.
+    """
+    camera, horizon, params = ctx.camera, ctx.horizon, ctx.params
+    dpsi = previous.dpsi_rad if math.isfinite(previous.dpsi_rad) else 0.0
+    if not (math.isfinite(previous.roll_rad) and math.isfinite(previous.pitch_rad)):
+        return None, None
+    R_before = batch_R_camera_from_runway(np.asarray(previous.roll_rad), np.asarray(previous.pitch_rad),
+                                          np.asarray(dpsi), camera.mount_rpy_rad)
+    R_now = batch_R_camera_from_runway(np.asarray(ctx.roll), np.asarray(ctx.pitch), np.asarray(dpsi),
+                                       camera.mount_rpy_rad)
+    K = camera.K
+    H = K @ R_now @ R_before.T @ np.linalg.inv(K)
+
+    def carry(uv):
+        uv = np.asarray(uv, float).reshape(-1, 2)
+        p = np.concatenate([uv, np.ones((len(uv), 1))], axis=1) @ H.T
+        return p[:, :2] / p[:, 2:3]
+
+    ends = {}
+    for name in ("left", "right"):
+        seg = np.asarray(previous.segments_uv.get(name, np.full((2, 2), np.nan)), float)
+        if not np.all(np.isfinite(seg)):
+            return None, None
+        ends[name] = carry(seg)
+    s0_l, k_l = horizon.pencil_from_points(ends["left"][0], ends["left"][1])
+    s0_r, k_r = horizon.pencil_from_points(ends["right"][0], ends["right"][1])
+    if not all(math.isfinite(float(x)) for x in (s0_l, k_l, s0_r, k_r)):
+        return None, None
+    s0 = 0.5 * (float(s0_l) + float(s0_r))
+    sd = horizon.to_sd(np.concatenate([ends["left"], ends["right"]]))
+    d_far, d_near = float(sd[:, 1].min()), float(sd[:, 1].max())
+    if d_near <= 1.0:
+        return None, None
+    mid = 0.5 * (d_far + d_near)
+    k_left = float(k_l) + (float(s0_l) - s0) / mid
+    k_right = float(k_r) + (float(s0_r) - s0) / mid
+    points = [ends["left"], ends["right"]]
+    corners = np.asarray(previous.corners_uv, float)[np.asarray(previous.corners_found, bool)]
+    if len(corners):
+        points.append(carry(corners))
+    points = np.concatenate(points)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    margin = params.roi_margin_px + params.roi_margin_fraction * float(max(hi - lo))
+    roi = (max(ground[0], int(math.floor(lo[0] - margin))), max(ground[1], int(math.floor(lo[1] - margin))),
+           min(ground[2], int(math.ceil(hi[0] + margin)) + 1), min(ground[3], int(math.ceil(hi[1] + margin)) + 1))
+    if roi[2] - roi[0] < 8 or roi[3] - roi[1] < 8:
+        return None, None
+    width_near = abs(k_right - k_left) * d_near
+    sigma = params.tracking_sigma_px + 0.05 * width_near
+    prediction = Prediction(s0=s0, k_left=k_left, k_right=k_right, d_far=d_far, d_near=d_near, sigma_px=sigma)
+    return prediction, roi
+
+
+def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
+    """Candidates in ``roi``, the trapezoid model, then measurement of the best hypotheses."""
+    params, horizon = ctx.params, ctx.horizon
+    segments = hough_segments(ctx.image, roi, max_side_px, params)
+    lines = check_lines(ctx.image, horizon, candidate_lines(segments, horizon, params), params)
+    hypotheses = runway_hypotheses(ctx.image, horizon, lines, params, prediction,
+                                   bottom_depth_px=_deepest_visible(horizon, ctx.camera.width, ctx.camera.height))
+    if not hypotheses:
+        return None, (f"no pair of edges meeting on the horizon among {len(lines)} candidate lines "
+                      f"({len(segments)} Hough segments)")
+    reasons = []
+    for hypothesis in hypotheses[:3]:
+        result, why = _measure(ctx, hypothesis, mode, roi)
+        if result is not None:
+            return result, None
+        reasons.append(why)
+    return None, reasons[0]
+
+
+def _pencil_pixel_line(horizon: HorizonFrame, s0: float, k: float, d_ref: float) -> PixelLine:
+    point = horizon.pencil_point(s0, k, d_ref)
+    direction = (k * horizon.t_uv + horizon.n_uv) / math.sqrt(1 + k * k)
+    return PixelLine(np.asarray(point, float), direction)
+
+
+def _image_span(line: PixelLine, width: int, height: int, margin: float = 1.0) -> tuple[float, float]:
+    """Positions along ``line`` between which it lies inside the image (slab clipping)."""
+    lo, hi = -math.inf, math.inf
+    for axis, size in ((0, width), (1, height)):
+        p, e = line.point[axis], line.direction[axis]
+        a, b = margin - 0.5, size - 0.5 - margin
+        if abs(e) < 1e-12:
+            if not a <= p <= b:
+                return math.nan, math.nan
+            continue
+        t1, t2 = (a - p) / e, (b - p) / e
+        lo, hi = max(lo, min(t1, t2)), min(hi, max(t1, t2))
+    return (lo, hi) if hi > lo else (math.nan, math.nan)
+
+
+def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slope: float) -> LineFit | None:
+    """Sub-pixel edge along the pencil line (s0, k), searched a little beyond its candidate span.
+
+    ``outward_s`` is the side (in s) of the runway's outside; ``width_slope`` the runway's width
+    per pixel of depth (``k_R - k_L``): a painted side stripe up to 4 % of the local width
+    (ICAO: 0.9 m on runways 30 m and wider, so 1.5 to 3 %) plus the blur is looked past to
+    its outer boundary, which is the runway's edge.
+    """
+    horizon, params = ctx.horizon, ctx.params
+    span = max(d_near - d_far, 1.0)
+    d_ref = 0.5 * (d_far + d_near)
+    line = _pencil_pixel_line(horizon, s0, k, d_ref)
+    scale = math.sqrt(1 + k * k)
+    d_lo = max(1.0, d_far - 0.25 * span)
+    d_hi = d_near + 0.35 * span
+    t_lo, t_hi = (d_lo - d_ref) * scale, (d_hi - d_ref) * scale
+    img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, params.search_halfwidth_px + 4)
+    t_lo, t_hi = max(t_lo, img_lo), min(t_hi, img_hi)
+    if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi - t_lo < params.min_edge_length_px:
+        return None
+    towards_s = (horizon.t_uv - k * horizon.n_uv) / scale      # unit normal towards +s
+    sign = 1 if line.normal @ towards_s > 0 else -1
+
+    def reach(t):
+        depth = np.maximum(d_ref + np.asarray(t) / scale, 0.0)
+        return 0.04 * abs(width_slope) * depth / scale + 1.5
+
+    return refine_line(ctx.image, line, (t_lo, t_hi), "edge", polarity=0,
+                       halfwidth_px=params.search_halfwidth_px, n_samples=params.refine_samples,
+                       iterations=params.refine_iterations, min_contrast=params.min_contrast,
+                       outward=outward_s * sign, outward_reach_px=reach)
+
+
+def _pencil_of(horizon: HorizonFrame, fit: LineFit) -> tuple[float, float, float]:
+    """``(s0, k, sigma_s0)`` of a refined line: horizon crossing, slope and its uncertainty."""
+    a = fit.line.point
+    b = fit.line.point + 10.0 * fit.line.direction
+    s0, k = horizon.pencil_from_points(a, b)
+    s0, k = float(s0), float(k)
+    crossing = horizon.vanishing_point_uv(s0) if math.isfinite(s0) else fit.line.point
+    sigma = fit.sigma_at(crossing) * math.sqrt(1 + k * k) if math.isfinite(k) else math.inf
+    return s0, k, sigma
+
+
+def _segment_in_depth(horizon: HorizonFrame, fit: LineFit) -> np.ndarray:
+    """End points (far, near) of a line's supported stretch, pixels (2, 2)."""
+    ends = fit.line.point + np.outer(fit.extent, fit.line.direction)
+    depth = horizon.to_sd(ends)[:, 1]
+    return ends if depth[0] <= depth[1] else ends[::-1]
+
+
+def _fuse_vanishing_point(horizon: HorizonFrame, fits, sigma_horizon_px: float) -> np.ndarray:
+    """Least-squares vanishing point of the runway lines and the horizon (pixels).
+
+    Minimises ``sum_i (n_i . p - c_i)^2 / sigma_i^2 + (n_h . p - c_h)^2 / sigma_h^2`` where each
+    line's sigma is its fitted uncertainty extrapolated to the horizon: the lines fix the
+    point along the horizon, the inertial horizon keeps it from sliding along lines that are
+    nearly parallel (a far runway).
+    """
+    A = np.zeros((2, 2))
+    b = np.zeros(2)
+    for fit in fits:
+        h = fit.line.homogeneous()
+        n, c = h[:2], -h[2]
+        s0, k, _ = _pencil_of(horizon, fit)
+        crossing = horizon.vanishing_point_uv(s0) if math.isfinite(s0) else fit.line.point
+        w = 1.0 / max(fit.sigma_at(crossing), 0.02) ** 2
+        A += w * np.outer(n, n)
+        b += w * c * n
+    n_h = horizon.n_uv
+    w_h = 1.0 / sigma_horizon_px ** 2
+    A += w_h * np.outer(n_h, n_h)
+    b += w_h * (n_h @ horizon.q_uv) * n_h
+    return np.linalg.solve(A, b)
+
+
+def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi):
+    """Refine a hypothesis into a measurement, or say why it fails."""
+    horizon, params, camera = ctx.horizon, ctx.params, ctx.camera
+    fits = {}
+    width_slope = hypothesis.k_right - hypothesis.k_left
+    for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
+        fit = _refine_edge(ctx, hypothesis.s0, k, hypothesis.d_far, hypothesis.d_near, outward, width_slope)
+        if fit is None:
+            return None, f"{name} edge: no consistent grey-level step along the candidate line"
+        length = fit.extent[1] - fit.extent[0]
+        if length < params.min_edge_length_px:
+            return None, f"{name} edge: supported over {length:.0f} px only (< {params.min_edge_length_px:g})"
+        if fit.support < params.min_edge_support:
+            return None, f"{name} edge: only {100 * fit.support:.0f} % of its profiles hold the edge"
+        if fit.residual_px > params.max_line_residual_px:
+            return None, f"{name} edge: not straight (RMS residual {fit.residual_px:.2f} px)"
+        fits[name] = fit
+    s0_l, k_l, sig_l = _pencil_of(horizon, fits["left"])
+    s0_r, k_r, sig_r = _pencil_of(horizon, fits["right"])
+    if not all(math.isfinite(x) for x in (s0_l, k_l, s0_r, k_r)):
+        return None, "edges parallel to the horizon"
+    tolerance = params.vp_tolerance_px + 3.0 * math.hypot(sig_l, sig_r)
+    if abs(s0_l - s0_r) > tolerance:
+        return None, (f"edges meet the horizon {abs(s0_l - s0_r):.1f} px apart (tolerance {tolerance:.1f} px): "
+                      "not the two sides of one runway")
+    seg_l, seg_r = _segment_in_depth(horizon, fits["left"]), _segment_in_depth(horizon, fits["right"])
+    d_far = max(horizon.to_sd(seg_l)[0, 1], horizon.to_sd(seg_r)[0, 1])
+    d_near = min(horizon.to_sd(seg_l)[1, 1], horizon.to_sd(seg_r)[1, 1])
+    if d_near <= d_far:
+        return None, "the two edges do not overlap in depth"
+    if not (s0_l + k_l * d_near < s0_r + k_r * d_near):
+        return None, "the edges cross below the horizon"
+    notes = []
+    # centre line: midway between the edges in horizon coordinates (harmonic conjugate)
+    weights = np.array([1.0 / max(sig_l, 1e-3) ** 2, 1.0 / max(sig_r, 1e-3) ** 2])
+    s0 = float((weights @ np.array([s0_l, s0_r])) / weights.sum())
+    d_mid = 0.5 * (d_far + d_near)
+    k_c = 0.5 * ((s0_l + k_l * d_mid - s0) + (s0_r + k_r * d_mid - s0)) / d_mid
+    centre_fit = _refine_centre(ctx, s0, k_c, k_l, k_r, d_far, d_near, hypothesis.centre_polarity)
+    all_fits = [fits["left"], fits["right"]]
+    if centre_fit is None:
+        notes.append("centre line not found")
+    else:
+        s0_c, _, sig_c = _pencil_of(horizon, centre_fit)
+        if abs(s0_c - s0) > params.vp_tolerance_px + 3.0 * math.hypot(sig_c, min(sig_l, sig_r)):
+            notes.append("centre line rejected (does not meet the edges on the horizon)")
+            centre_fit = None
+        else:
+            all_fits.append(centre_fit)
+    vp_uv = _fuse_vanishing_point(horizon, all_fits, params.horizon_sigma_px)
+    vp_xy = camera.pixels_to_normalized(vp_uv)
+    dF = float(dF_from_vanishing_point(vp_xy[None, :], np.array([horizon.rho]), np.array([horizon.theta]),
+                                       camera)[0])
+    dpsi = float(dpsi_from_dF(np.array([dF]), np.array([ctx.roll]), np.array([ctx.pitch]), camera)[0])
+    s0_vp = float(horizon.to_sd(vp_uv)[0])
+
+    # threshold and runway end
+    corners = np.full((4, 2), np.nan)
+    corners_found = np.zeros(4, dtype=bool)
+    threshold_line = end_line = (math.nan, math.nan)
+    depth_span = d_near - d_far
+    width, height = camera.width, camera.height
+    bottom_depth = _deepest_visible(horizon, width, height)
+    edges_reach_border = d_near >= bottom_depth - 3.0
+    min_step = params.min_contrast
+    near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_near,
+                                (d_near - params.threshold_search_fraction * depth_span,
+                                 d_near + params.threshold_search_fraction * depth_span),
+                                outward=1, min_step=min_step)
+    if near is None:
+        notes.append("threshold below the image" if edges_reach_border else "threshold not found")
+    else:
+        threshold_line = _line_chart(camera, near.line_h)
+        for index, uv in ((0, near.corner_left_uv), (1, near.corner_right_uv)):
+            if camera.in_image(uv, margin_px=0.0):
+                corners[index] = uv
+                corners_found[index] = True
+        if not corners_found[:2].all():
+            notes.append("a threshold corner lies outside the image")
+    far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far,
+                               (max(0.5, d_far - params.threshold_search_fraction * depth_span),
+                                d_far + params.threshold_search_fraction * depth_span),
+                               outward=-1, min_step=min_step)
+    if far is None:
+        notes.append("runway end not found")
+    else:
+        end_line = _line_chart(camera, far.line_h)
+        for index, uv in ((2, far.corner_left_uv), (3, far.corner_right_uv)):
+            if camera.in_image(uv, margin_px=0.0):
+                corners[index] = uv
+                corners_found[index] = True
+
+    # confidence: support, straightness, agreement on the horizon, contrast, centre line
+    q_support = math.sqrt(fits["left"].support * fits["right"].support)
+    q_residual = math.exp(-0.5 * (max(fits["left"].residual_px, fits["right"].residual_px) / 0.8) ** 2)
+    chi = abs(s0_l - s0_r) / max(tolerance / 3.0, 1e-6)
+    q_vp = math.exp(-0.5 * (chi / 2.0) ** 2)
+    q_contrast = min(1.0, min(fits["left"].contrast, fits["right"].contrast) / (4.0 * params.min_contrast))
+    confidence = q_support * q_residual * q_vp * math.sqrt(q_contrast) * (1.0 if centre_fit is not None else 0.85)
+    if confidence < params.min_confidence:
+        return None, (f"runway candidate too weak (confidence {confidence:.2f} < {params.min_confidence:g}: "
+                      f"support {q_support:.2f}, residual {q_residual:.2f}, horizon agreement {q_vp:.2f}, "
+                      f"contrast {q_contrast:.2f})")
+    lines = {name: _line_chart(camera, fits[name].line.homogeneous()) for name in ("left", "right")}
+    lines["center"] = (_line_chart(camera, centre_fit.line.homogeneous()) if centre_fit is not None
+                       else (math.nan, math.nan))
+    segments = {"left": seg_l, "right": seg_r,
+                "center": _segment_in_depth(horizon, centre_fit) if centre_fit is not None else np.full((2, 2), np.nan)}
+    fit_of = {"left": fits["left"], "right": fits["right"], "center": centre_fit}
+    return DetectionResult(
+        found=True, reason="; ".join(notes), confidence=float(confidence), corners_uv=corners,
+        corners_found=corners_found, lines=lines,
+        line_residual_px={n: (f.residual_px if f is not None else math.nan) for n, f in fit_of.items()},
+        line_support={n: (f.support if f is not None else 0.0) for n, f in fit_of.items()},
+        segments_uv=segments, threshold_line=threshold_line, end_line=end_line, vanishing_point_uv=vp_uv,
+        horizon=ctx.horizon_line, dF_px=dF, dpsi_rad=dpsi, roll_rad=ctx.roll, pitch_rad=ctx.pitch, mode=mode,
+        roi=tuple(int(a) for a in roi), image_size=(width, height), elapsed_s=time.perf_counter() - ctx.start,
+        notes=tuple(notes)), None
+
+
+def _refine_centre(ctx: _Context, s0, k_c, k_l, k_r, d_far, d_near, polarity_hint: int) -> LineFit | None:
+    """The centre line (a painted stripe, often dashed) midway between the edges."""
+    horizon, params = ctx.horizon, ctx.params
+    line = _pencil_pixel_line(horizon, s0, k_c, 0.5 * (d_far + d_near))
+    scale = math.sqrt(1 + k_c * k_c)
+    d_ref = 0.5 * (d_far + d_near)
+    t_lo, t_hi = (d_far - d_ref) * scale, (d_near - d_ref) * scale
+    img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, 8.0)
+    t_lo, t_hi = max(t_lo, img_lo), min(t_hi, img_hi)
+    if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi - t_lo < params.min_edge_length_px:
+        return None
+    width_near = abs(k_r - k_l) * d_near / scale
+    halfwidth = float(np.clip(0.08 * width_near, 3.0, params.search_halfwidth_px * 3))
+
+    def stripe_width(t):
+        depth = d_ref + np.asarray(t) / scale
+        return np.maximum(0.06 * np.abs(k_r - k_l) * depth / scale, 2.0)
+
+    best = None
+    for polarity in ((polarity_hint,) if polarity_hint else (1, -1)):
+        fit = refine_line(ctx.image, line, (t_lo, t_hi), "stripe", polarity=polarity, halfwidth_px=halfwidth,
+                          n_samples=params.refine_samples, iterations=params.refine_iterations,
+                          min_contrast=params.min_contrast, stripe_width_px=stripe_width)
+        if fit is None or fit.residual_px > params.max_line_residual_px:
+            continue
+        if (fit.extent[1] - fit.extent[0]) < params.min_edge_length_px or fit.support < 0.25:
+            continue
+        if best is None or fit.n_inliers > best.n_inliers:
+            best = fit
+    return best
+
+
+def _deepest_visible(horizon: HorizonFrame, width: int, height: int) -> float:
+    corners = np.array([[-0.5, -0.5], [width - 0.5, -0.5], [-0.5, height - 0.5], [width - 0.5, height - 0.5]])
+    return float(horizon.to_sd(corners)[:, 1].max())
+
+
+def _line_chart(camera: CameraModel, line_h) -> tuple[float, float]:
+    """SPEC ``(rho, theta)`` of a homogeneous pixel line ``a u + b v + c = 0``."""
+    a, b, c = (float(x) for x in line_h)
+    norm = math.hypot(a, b)
+    theta_px = math.atan2(b / norm, a / norm)
+    rho_px = -c / norm
+    rho, theta = camera.line_from_pixel_hough(rho_px, theta_px)
+    return float(rho), float(theta)
 
 
 def _as_float(value) -> float:

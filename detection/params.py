@@ -52,6 +52,9 @@ class DetectorParams:
     vp_tolerance_px : float
         Two edges belong to one runway when their crossings of the horizon agree to this many
         pixels plus their extrapolation uncertainty.
+    min_length_to_width : float
+        Smallest length-to-width ratio of a runway (a long strip; ICAO runways are 20 to 80
+        times longer than wide): pairs of lines bounding a shorter strip are not runways.
     min_edge_length_px : float
         Shortest runway edge accepted (full-resolution pixels along the line).
     search_halfwidth_px : float
@@ -73,6 +76,12 @@ class DetectorParams:
     threshold_search_fraction : float
         The threshold is searched along the runway over this fraction of the edges' visible
         length on each side of the near end of the edge support.
+    horizon_sigma_px : float
+        One-sigma uncertainty of the horizon from the inertial attitude, pixels: weighs the
+        horizon against the three lines when the vanishing point is fused.
+    tracking_sigma_px : float
+        How far (one sigma, pixels) the runway may move from its prediction between frames
+        before a candidate loses the preference the prediction gives it.
     min_confidence : float
         Detections below this confidence are reported as not found.
     horizon_margin_px : float
@@ -82,16 +91,17 @@ class DetectorParams:
     acquisition_max_side_px: int = 1024
     tracking_max_side_px: int = 640
     blur_sigma_px: float = 1.0
-    canny_low_quantile: float = 0.80
-    canny_high_quantile: float = 0.93
-    canny_min_high: float = 40.0
+    canny_low_quantile: float = 0.70
+    canny_high_quantile: float = 0.85
+    canny_min_high: float = 10.0
     hough_votes: int = 18
     hough_min_length_px: float = 14.0
     hough_max_gap_px: float = 3.0
     hough_angle_step_deg: float = 0.25
-    max_candidates: int = 160
+    max_candidates: int = 150
     max_edge_slope: float = 4.0
     vp_tolerance_px: float = 8.0
+    min_length_to_width: float = 8.0
     min_edge_length_px: float = 24.0
     search_halfwidth_px: float = 6.0
     refine_samples: int = 200
@@ -102,6 +112,8 @@ class DetectorParams:
     roi_margin_px: float = 40.0
     roi_margin_fraction: float = 0.15
     threshold_search_fraction: float = 0.35
+    horizon_sigma_px: float = 4.0
+    tracking_sigma_px: float = 12.0
     min_confidence: float = 0.35
     horizon_margin_px: float = 0.0
 
@@ -133,6 +145,7 @@ class DetectorParams:
         number("max_candidates", 4, 10000, integer=True)
         number("max_edge_slope", 0.1, 100.0)
         number("vp_tolerance_px", 0.1, 1000.0)
+        number("min_length_to_width", 0.0, 1000.0)
         number("min_edge_length_px", 4.0, 10000.0)
         number("search_halfwidth_px", 1.5, 200.0)
         number("refine_samples", 8, 100000, integer=True)
@@ -143,6 +156,8 @@ class DetectorParams:
         number("roi_margin_px", 0.0, 4096.0)
         number("roi_margin_fraction", 0.0, 10.0)
         number("threshold_search_fraction", 0.01, 1.0)
+        number("horizon_sigma_px", 0.01, 10000.0)
+        number("tracking_sigma_px", 0.1, 10000.0)
         number("min_confidence", 0.0, 1.0)
         number("horizon_margin_px", 0.0, 100000.0)
 
@@ -157,6 +172,8 @@ class DetectorParams:
                        tracking_max_side_px=max(64, min(self.tracking_max_side_px, image_side_px)),
                        min_edge_length_px=max(4.0, self.min_edge_length_px * k),
                        roi_margin_px=self.roi_margin_px * k,
+                       horizon_sigma_px=self.horizon_sigma_px * k,
+                       tracking_sigma_px=self.tracking_sigma_px * k,
                        vp_tolerance_px=max(0.1, self.vp_tolerance_px * k))
 
     # ----------------------------------------------------------------- files

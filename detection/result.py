@@ -47,6 +47,9 @@ class DetectionResult:
         RMS distance (pixels) of each line's inlying edge points to the refined line.
     line_support : dict
         Fraction of each line's sampled profiles that held an inlying edge (or stripe).
+    segments_uv : dict
+        ``{"left", "right", "center"}`` -> (2, 2) pixel end points (far, near) of the stretch of
+        each line the image supports; NaN where not found. Used to predict the next frame.
     threshold_line, end_line : tuple
         ``(rho, theta)`` of the threshold and of the runway end, NaN where not found.
     vanishing_point_uv : ndarray, shape (2,)
@@ -80,6 +83,7 @@ class DetectionResult:
     lines: dict = field(default_factory=lambda: {name: _NAN_LINE for name in LINE_NAMES})
     line_residual_px: dict = field(default_factory=lambda: {name: math.nan for name in LINE_NAMES})
     line_support: dict = field(default_factory=lambda: {name: 0.0 for name in LINE_NAMES})
+    segments_uv: dict = field(default_factory=lambda: {name: np.full((2, 2), np.nan) for name in LINE_NAMES})
     threshold_line: tuple = _NAN_LINE
     end_line: tuple = _NAN_LINE
     vanishing_point_uv: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))

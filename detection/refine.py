@@ -1,0 +1,545 @@
+"""Sub-pixel refinement of an image line against the grey-level gradient.
+
+A line is refined the way ViSP's moving edges or Dickmanns' gradient windows do it: profiles
+are sampled across the predicted line (bilinear interpolation of the full-resolution frame,
+three taps along the line averaged), each profile is differentiated with the smoothed
+central difference ``[-1, -2, 0, 2, 1] / 8``, the edge in each profile is the extremum of
+the derivative with the expected sign, located to a fraction of a pixel by a parabola
+through the three samples around it, and a line is fitted to those edge points by weighted
+total least squares with Tukey biweight re-weighting (outliers: markings, texture, gaps).
+Stripes (the centre line) are located as the midpoint between their rising and falling edge.
+
+Pixels: (0, 0) is the centre of the top-left pixel (SPEC), the same convention as
+``cv2.remap``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+__all__ = ["PixelLine", "LineFit", "sample_profiles", "edge_offsets", "stripe_offsets", "fit_line",
+           "refine_line"]
+
+_DERIVATIVE = np.array([-1.0, -2.0, 0.0, 2.0, 1.0]) / 8.0
+
+
+@dataclass(frozen=True)
+class PixelLine:
+    """A line in pixels: a point on it and a unit direction; the normal is the direction turned
+    by +90 deg in the image (``(-e_v, e_u)``)."""
+
+    point: np.ndarray
+    direction: np.ndarray
+
+    @property
+    def normal(self) -> np.ndarray:
+        return np.array([-self.direction[1], self.direction[0]])
+
+    @classmethod
+    def through(cls, uv_a, uv_b) -> "PixelLine":
+        a = np.asarray(uv_a, float)
+        b = np.asarray(uv_b, float)
+        e = b - a
+        return cls(a, e / np.linalg.norm(e))
+
+    def distance(self, uv) -> np.ndarray:
+        """Signed distance (pixels) of points ``(..., 2)`` along the normal."""
+        return (np.asarray(uv, float) - self.point) @ self.normal
+
+    def homogeneous(self) -> np.ndarray:
+        """``(a, b, c)`` with ``a u + b v + c = 0`` and ``(a, b)`` the unit normal."""
+        n = self.normal
+        return np.array([n[0], n[1], -n @ self.point])
+
+
+@dataclass(frozen=True)
+class LineFit:
+    """A refined line and how well the image supports it.
+
+    Attributes
+    ----------
+    line : PixelLine
+        Fitted line (point at the inliers' centroid).
+    residual_px : float
+        RMS distance of the inliers to the line.
+    support : float
+        Inliers / profiles sampled.
+    contrast : float
+        Median absolute grey-level step (edges) or stripe height (stripes) of the inliers.
+    polarity : int
+        Sign of the grey-level change along the line normal (stripes: +1 bright, -1 dark).
+    extent : tuple of float
+        ``(t_min, t_max)``, positions along ``line.direction`` (from ``line.point``) of the
+        inliers' span.
+    sigma_offset_px, sigma_angle_rad : float
+        One-sigma uncertainty of the line's offset at the centroid and of its angle.
+    n_inliers : int
+    points : ndarray, shape (n, 2)
+        Inlying edge points (pixels).
+    """
+
+    line: PixelLine
+    residual_px: float
+    support: float
+    contrast: float
+    polarity: int
+    extent: tuple
+    sigma_offset_px: float
+    sigma_angle_rad: float
+    n_inliers: int
+    points: np.ndarray
+
+    def sigma_at(self, uv) -> float:
+        """One-sigma normal uncertainty (pixels) of the line at a point, extrapolated."""
+        t = float((np.asarray(uv, float) - self.line.point) @ self.line.direction)
+        return math.hypot(self.sigma_offset_px, t * self.sigma_angle_rad)
+
+
+def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: float,
+                    step_px: float = 1.0, taps_px: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Grey-level profiles across a line.
+
+    Parameters
+    ----------
+    image : ndarray (H, W), uint8 or float32
+    centres_uv : ndarray (n, 2)
+        Profile centres (pixels).
+    normal_uv, direction_uv : ndarray (2,) or (n, 2)
+        Unit normal (profile axis) and unit direction along the line.
+    halfwidth_px : float
+        Profiles span ``[-halfwidth, halfwidth]`` along the normal.
+    step_px, taps_px : float
+        Spacing of the profile samples; three taps at ``-taps, 0, +taps`` along the line are
+        averaged (smoothing along the line, where the edge does not change).
+
+    Returns
+    -------
+    profiles : ndarray (n, m)
+    offsets : ndarray (m,)
+        Position of each profile sample along the normal (pixels).
+    """
+    centres = np.asarray(centres_uv, np.float64)
+    m = int(math.floor(halfwidth_px / step_px))
+    offsets = np.arange(-m, m + 1) * step_px
+    normal = np.broadcast_to(np.asarray(normal_uv, np.float64), centres.shape)
+    direction = np.broadcast_to(np.asarray(direction_uv, np.float64), centres.shape)
+    taps = np.array([-taps_px, 0.0, taps_px])
+    grid = (centres[:, None, None, :] + offsets[None, None, :, None] * normal[:, None, None, :]
+            + taps[None, :, None, None] * direction[:, None, None, :])        # (n, 3, m, 2)
+    n = len(centres)
+    map_u = grid[..., 0].reshape(n * 3, -1)
+    map_v = grid[..., 1].reshape(n * 3, -1)
+    height, width = image.shape
+    outside = ((map_u < -0.5) | (map_v < -0.5) | (map_u > width - 0.5) | (map_v > height - 0.5)
+               | ~np.isfinite(map_u) | ~np.isfinite(map_v))
+    inside_u, inside_v = map_u[~outside], map_v[~outside]
+    if inside_u.size == 0:
+        return np.full((n, len(offsets)), np.nan, np.float32), offsets
+    # interpolate on a float32 crop of the frame around the samples (exact grey levels)
+    u0 = max(0, int(math.floor(inside_u.min())) - 1)
+    v0 = max(0, int(math.floor(inside_v.min())) - 1)
+    u1 = min(width, int(math.ceil(inside_u.max())) + 2)
+    v1 = min(height, int(math.ceil(inside_v.max())) + 2)
+    crop = np.asarray(image[v0:v1, u0:u1], dtype=np.float32)
+    map_u = np.where(outside, -10.0, map_u - u0).astype(np.float32)
+    map_v = np.where(outside, -10.0, map_v - v0).astype(np.float32)
+    values = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    values = values.reshape(n, 3, -1)
+    values[outside.reshape(n, 3, -1)] = np.nan
+    return values.mean(axis=1), offsets
+
+
+def _derivative(profiles: np.ndarray, step_px: float) -> np.ndarray:
+    """Smoothed central difference along each profile, grey levels per pixel (edges: NaN)."""
+    out = np.full(profiles.shape, np.nan, np.float32)
+    if profiles.shape[1] >= 5:
+        k = _DERIVATIVE
+        out[:, 2:-2] = (k[0] * profiles[:, :-4] + k[1] * profiles[:, 1:-3] + k[3] * profiles[:, 3:-1]
+                        + k[4] * profiles[:, 4:]) / step_px
+    return out
+
+
+def _parabola_peak(values: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Sub-sample offset of the peak of a parabola through values[index-1 .. index+1] (rows)."""
+    rows = np.arange(len(index))
+    left = values[rows, np.clip(index - 1, 0, values.shape[1] - 1)]
+    centre = values[rows, index]
+    right = values[rows, np.clip(index + 1, 0, values.shape[1] - 1)]
+    denominator = left - 2.0 * centre + right
+    with np.errstate(divide="ignore", invalid="ignore"):
+        delta = np.where(np.abs(denominator) > 1e-9, 0.5 * (left - right) / denominator, 0.0)
+    return np.clip(np.nan_to_num(delta), -0.5, 0.5)
+
+
+def edge_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int, prefer_outer: int = 0,
+                 outer_ratio: float = 0.4, window: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Sub-pixel position of the step edge in each profile.
+
+    Parameters
+    ----------
+    profiles : (n, m) grey levels; offsets : (m,) their positions along the normal.
+    polarity : +1 (grey rises along the normal), -1 (falls) or 0 (strongest of either).
+    prefer_outer : 0, or +1/-1 to take, among the edges of the right sign that reach
+        ``outer_ratio`` of the strongest one, the one furthest along +normal / -normal (the
+        outer boundary of a painted side stripe rather than its inner edge).
+    window : (n, m) bool, optional
+        Where each profile may hold its edge.
+
+    Returns
+    -------
+    position : (n,) offset of the edge (NaN where the profile has none).
+    strength : (n,) absolute grey-level slope at the edge (grey levels per pixel).
+    """
+    step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
+    g = _derivative(profiles, step)
+    signed = g * polarity if polarity else np.abs(g)
+    signed = np.where(np.isfinite(signed), signed, -np.inf)
+    if window is not None:
+        signed = np.where(window, signed, -np.inf)
+    index = np.argmax(signed, axis=1)
+    best = signed[np.arange(len(index)), index]
+    if prefer_outer:
+        # local maxima of the signed slope reaching outer_ratio of the best one
+        interior = np.zeros_like(signed, dtype=bool)
+        interior[:, 1:-1] = (signed[:, 1:-1] >= signed[:, :-2]) & (signed[:, 1:-1] >= signed[:, 2:])
+        strong = interior & (signed >= outer_ratio * best[:, None]) & (best[:, None] > 0)
+        columns = np.arange(signed.shape[1])[None, :]
+        if prefer_outer > 0:
+            candidate = np.where(strong, columns, -1).max(axis=1)
+        else:
+            candidate = np.where(strong, columns, signed.shape[1]).min(axis=1)
+        has = (candidate >= 0) & (candidate < signed.shape[1])
+        index = np.where(has, candidate, index)
+        best = signed[np.arange(len(index)), index]
+    delta = _parabola_peak(np.where(np.isfinite(signed), signed, 0.0), index)
+    position = offsets[index] + delta * step
+    valid = np.isfinite(best) & (best > 0) & (index > 1) & (index < signed.shape[1] - 2)
+    position = np.where(valid, position, np.nan)
+    strength = np.where(valid, best, 0.0)
+    return position, strength
+
+
+def transition_offsets(profiles: np.ndarray, offsets: np.ndarray, window: np.ndarray, halfspan_px: float = 2.0,
+                       side_px: tuple = (2.5, 5.0)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centre of the strongest grey-level transition in each profile, and its net step.
+
+    The centre is the centroid of the gradient magnitude within ``halfspan_px`` of the
+    strongest gradient: stable from profile to profile whether the transition is a plain step
+    or a step lined with a thin painted stripe (two flanks), which is what a candidate line
+    needs before it is known which side is the runway. The net step is the mean grey level
+    ``side_px`` beyond the centre minus the mean as far before it, so a bright border stripe
+    does not flip it.
+
+    Returns ``(position, strength, net_step)`` (NaN where none).
+    """
+    step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
+    n, m = profiles.shape
+    g = _derivative(profiles, step)
+    finite = np.isfinite(g)
+    a = np.where(finite & window, np.abs(g), -np.inf)
+    rows = np.arange(n)
+    peak = np.argmax(a, axis=1)
+    best = a[rows, peak]
+    span = max(1, int(round(halfspan_px / step)))
+    idx = np.clip(peak[:, None] + np.arange(-span, span + 1)[None, :], 0, m - 1)
+    mag = np.where(finite[rows[:, None], idx], np.abs(np.nan_to_num(g[rows[:, None], idx])), 0.0)
+    w = np.where(mag >= 0.2 * best[:, None], mag, 0.0)
+    total = w.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        position = (w * offsets[idx]).sum(axis=1) / total
+    lo, hi = side_px
+    rel = offsets[None, :] - np.nan_to_num(position)[:, None]
+    after = (rel >= lo) & (rel <= hi)
+    before = (rel <= -lo) & (rel >= -hi)
+    with np.errstate(invalid="ignore"):
+        net = (np.nansum(np.where(after, profiles, 0.0), axis=1) / np.maximum(after.sum(axis=1), 1)
+               - np.nansum(np.where(before, profiles, 0.0), axis=1) / np.maximum(before.sum(axis=1), 1))
+    valid = np.isfinite(best) & (best > 0) & (total > 0) & (after.sum(axis=1) > 0) & (before.sum(axis=1) > 0)
+    return (np.where(valid, position, np.nan), np.where(valid, best, 0.0), np.where(valid, net, np.nan))
+
+
+def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, window: np.ndarray,
+                     stripe_reach_px, flank_ratio: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+    """Sub-pixel position of a region's boundary in each profile, painted border stripe or not.
+
+    Walking outwards (``outward`` = +1: along +offsets), a plain boundary is one step; a
+    boundary lined with a painted stripe (a runway's side stripe, brighter or darker than
+    both sides) is two steps of opposite signs, and the boundary is the outer one. So: take
+    the strongest step in the window; if within ``stripe_reach_px`` outwards of it there is a
+    step of the opposite sign reaching ``flank_ratio`` of its strength, the strongest step was
+    the stripe's inner flank and the boundary is that outer flank.
+
+    A flank is located at the centroid of its derivative lobe (within 1 px of its peak). A
+    rendered frame is area-sampled: a step becomes a one-pixel ramp whose derivative lobe is
+    centred on the step. A stripe narrower than a pixel becomes a one-pixel bump whatever its
+    width, its outer flank centred half a pixel minus half the stripe outside the stripe's
+    centre: when the two flanks are a pixel apart (unresolved stripe), the boundary is put a
+    quarter pixel inside the outer flank, which is within a quarter pixel of it for any width
+    below a pixel.
+
+    Profiles should be sampled finely (0.5 px); the derivative is the central difference.
+
+    Returns ``(position, strength)``: offsets (NaN where none) and the flank's grey-level
+    slope (grey levels per pixel).
+    """
+    step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
+    n, m = profiles.shape
+    g = np.full(profiles.shape, np.nan, np.float32)
+    g[:, 1:-1] = (profiles[:, 2:] - profiles[:, :-2]) / (2.0 * step)
+    finite = np.isfinite(g)
+    g0 = np.where(finite, g, 0.0)
+    a = np.where(finite & window, np.abs(g0), -np.inf)
+    rows = np.arange(n)
+    p1 = np.argmax(a, axis=1)
+    best = a[rows, p1]
+    sign1 = np.sign(g0[rows, p1])
+    columns = np.arange(m)[None, :]
+    out_dir = 1 if outward >= 0 else -1
+    reach = np.broadcast_to(np.asarray(stripe_reach_px, float) / step, (n,))[:, None]
+    beyond = (columns - p1[:, None]) * out_dir
+    zone = (beyond >= 2) & (beyond <= reach + 1) & finite
+    opposite = np.where(zone, -sign1[:, None] * g0, -np.inf)          # > 0 where the sign is opposite
+    local = np.zeros(zone.shape, dtype=bool)
+    local[:, 1:-1] = (opposite[:, 1:-1] >= opposite[:, :-2]) & (opposite[:, 1:-1] >= opposite[:, 2:])
+    opposite = np.where(local, opposite, -np.inf)
+    p2 = np.argmax(opposite, axis=1)
+    has_outer = opposite[rows, p2] >= flank_ratio * best
+    chosen = np.where(has_outer, p2, p1)
+    lobe_sign = np.where(has_outer, -sign1, sign1)
+    strength = np.where(has_outer, opposite[rows, p2], best)
+    # centroid of the chosen lobe within one pixel of its peak
+    half = max(1, int(round(1.0 / step)))
+    idx = np.clip(chosen[:, None] + np.arange(-half, half + 1)[None, :], 0, m - 1)
+    w = np.maximum(lobe_sign[:, None] * g0[rows[:, None], idx], 0.0)
+    total = w.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        position = (w * offsets[idx]).sum(axis=1) / total
+    # unresolved stripe (flanks about a pixel apart): the boundary lies inside the outer flank
+    separation = np.abs(p2 - p1) * step
+    unresolved = has_outer & (separation <= 1.25)
+    position = position - np.where(unresolved, 0.25 * out_dir, 0.0)
+    valid = np.isfinite(best) & (best > 0) & (total > 0) & (chosen >= half) & (chosen < m - half)
+    return np.where(valid, position, np.nan), np.where(valid, strength, 0.0)
+
+
+def stripe_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
+                   max_width_px: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """Sub-pixel centre of a bright (polarity +1) or dark (-1) stripe in each profile.
+
+    The stripe's centre is the midpoint of its rising and falling edges: this works the same
+    for a stripe narrower than a pixel (the two derivative peaks sit symmetrically about it)
+    and for one many pixels wide. The edges are searched within ``max_width_px`` (scalar or
+    one per profile) of the profile's extreme grey level.
+
+    Returns
+    -------
+    position : (n,) offset of the stripe centre (NaN where none).
+    height : (n,) grey-level height of the stripe above its surroundings.
+    """
+    step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
+    n, m = profiles.shape
+    sign = 1.0 if polarity >= 0 else -1.0
+    p = np.where(np.isfinite(profiles), profiles * sign, -np.inf)
+    g = _derivative(np.where(np.isfinite(profiles), profiles, 0.0) * sign, step)
+    g[~np.isfinite(g)] = 0.0
+    centre = np.argmax(p, axis=1)
+    columns = np.arange(m)[None, :]
+    reach = np.broadcast_to(np.maximum(np.asarray(max_width_px, float) / step, 2.0), (n,))[:, None]
+    left_zone = (columns <= centre[:, None]) & (columns >= centre[:, None] - reach) & (columns >= 2)
+    right_zone = (columns >= centre[:, None]) & (columns <= centre[:, None] + reach) & (columns <= m - 3)
+    rise = np.where(left_zone, g, -np.inf)
+    fall = np.where(right_zone, -g, -np.inf)
+    i_rise = np.argmax(rise, axis=1)
+    i_fall = np.argmax(fall, axis=1)
+    rows = np.arange(n)
+    ok = np.isfinite(rise[rows, i_rise]) & np.isfinite(fall[rows, i_fall]) \
+        & (rise[rows, i_rise] > 0) & (fall[rows, i_fall] > 0)
+    d_rise = _parabola_peak(g, i_rise)
+    d_fall = _parabola_peak(-g, i_fall)
+    position = offsets[0] + step * (0.5 * (i_rise + d_rise + i_fall + d_fall))
+    # height: the peak above the mean of the profile's two ends beyond the stripe edges
+    outer_left = np.clip(i_rise - 3, 0, m - 1)
+    outer_right = np.clip(i_fall + 3, 0, m - 1)
+    base = 0.5 * (p[rows, outer_left] + p[rows, outer_right])
+    height = p[rows, centre] - base
+    ok &= np.isfinite(height) & (height > 0)
+    return np.where(ok, position, np.nan), np.where(ok, height, 0.0)
+
+
+def fit_line(points: np.ndarray, weights: np.ndarray, min_sigma_px: float = 0.05,
+             iterations: int = 6) -> tuple[PixelLine, np.ndarray, float] | None:
+    """Weighted total-least-squares line with Tukey biweight re-weighting.
+
+    Returns ``(line, inlier mask, robust sigma)`` or None with fewer than 3 usable points.
+    """
+    pts = np.asarray(points, float)
+    w0 = np.asarray(weights, float)
+    usable = np.isfinite(pts).all(axis=1) & (w0 > 0)
+    if usable.sum() < 3:
+        return None
+    pts, w0 = pts[usable], w0[usable]
+    w = w0.copy()
+    line, sigma = None, math.inf
+    for _ in range(iterations):
+        total = w.sum()
+        if total <= 0:
+            return None
+        centroid = (w[:, None] * pts).sum(axis=0) / total
+        rel = pts - centroid
+        cov = (w[:, None, None] * rel[:, :, None] * rel[:, None, :]).sum(axis=0) / total
+        eigenvalues, eigenvectors = np.linalg.eigh(cov)
+        direction = eigenvectors[:, 1]
+        line = PixelLine(centroid, direction)
+        r = rel @ line.normal
+        mad = np.median(np.abs(r[w > 0] - np.median(r[w > 0]))) if np.any(w > 0) else 0.0
+        sigma = max(1.4826 * mad, min_sigma_px)
+        c = 4.685 * sigma
+        u = r / c
+        w = w0 * np.where(np.abs(u) < 1.0, (1 - u ** 2) ** 2, 0.0)
+    inliers_usable = w > 0
+    mask = np.zeros(len(usable), dtype=bool)
+    mask[np.nonzero(usable)[0][inliers_usable]] = True
+    return line, mask, sigma
+
+
+def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", polarity: int = 0,
+                halfwidth_px: float = 6.0, n_samples: int = 200, iterations: int = 3,
+                min_contrast: float = 6.0, outward: int = 0, outward_reach_px=0.0,
+                stripe_width_px=None) -> LineFit | None:
+    """Refine ``line`` on ``image`` between positions ``t_range`` along it.
+
+    Parameters
+    ----------
+    image : ndarray (H, W)
+        Full-resolution grey frame (uint8 or float32).
+    line : PixelLine
+        Predicted line; ``t_range = (t0, t1)`` is the span sampled, in pixels along
+        ``line.direction`` from ``line.point``.
+    kind : "edge" or "stripe"
+    polarity : +1/-1 (sign of the grey change along ``line.normal``, or bright/dark stripe),
+        0 to take the stronger of either (edges only).
+    halfwidth_px : float
+        First search band; each later pass halves it (not below 2.5 px).
+    n_samples : int
+        Profiles along the line (at most one per pixel).
+    min_contrast : float
+        Edges weaker than this (grey-level step) are not used.
+    outward : 0, or +1/-1: the side of the line (along +/- ``line.normal``) where the runway's
+        outside lies. The edge is then the region's boundary (:func:`boundary_offsets`): past
+        a painted border stripe up to ``outward_reach_px`` wide (scalar or callable of the
+        position t along the line).
+    stripe_width_px : callable t -> width or None
+        Widest stripe expected at each position (stripes only).
+
+    Returns
+    -------
+    LineFit or None when fewer than 3 profiles hold an edge.
+    """
+    t0, t1 = float(min(t_range)), float(max(t_range))
+    length = t1 - t0
+    if not (math.isfinite(length) and length >= 2.0):
+        return None
+    n = int(max(3, min(n_samples, math.floor(length) + 1)))
+    t = np.linspace(t0, t1, n)
+    halfwidth = float(halfwidth_px)
+    current = line
+    result = None
+    for _ in range(iterations):
+        centres = current.point + t[:, None] * current.direction
+        stripe_reach = np.broadcast_to(np.asarray(
+            outward_reach_px(t) if callable(outward_reach_px) else outward_reach_px, float), t.shape)
+        profiles, offsets = sample_profiles(image, centres, current.normal, current.direction,
+                                            halfwidth + (float(stripe_reach.max()) if outward else 0.0) + 3.0,
+                                            step_px=0.5 if (kind == "edge" and outward) else 1.0)
+        window = np.broadcast_to(np.abs(offsets)[None, :] <= halfwidth, profiles.shape)
+        if kind == "edge" and outward:
+            position, strength = boundary_offsets(profiles, offsets, outward, window, stripe_reach)
+            contrast = strength / 0.5      # an area-sampled step of height h has slope ~h/2 at its ramp
+        elif kind == "edge":
+            position, strength = edge_offsets(profiles, offsets, polarity, 0, window=window)
+            # a blurred step of height h has a peak slope near h / (sqrt(2 pi) sigma); with the
+            # 5-tap derivative kernel and ~1 px blur, slope ~ 0.3 h: the contrast estimate
+            contrast = strength / 0.3
+        elif kind == "stripe":
+            width = stripe_width_px(t) if stripe_width_px is not None else halfwidth
+            position, contrast = stripe_offsets(profiles, offsets, polarity, width)
+            strength = contrast
+        else:
+            raise ValueError(f"kind must be 'edge' or 'stripe', got {kind!r}")
+        position_out = position * (outward if outward else 1)
+        reach_out = stripe_reach if outward else 0.0
+        keep = np.isfinite(position) & (position_out >= -halfwidth) & (position_out <= halfwidth + reach_out) \
+            & (contrast >= min_contrast)
+        if keep.sum() >= 3:
+            # texture beside the line (grass) is weaker than the line's own edge: drop points
+            # much weaker than the line's typical strength
+            keep &= contrast >= 0.35 * np.median(contrast[keep])
+        if keep.sum() < 3:
+            return None
+        points = centres + position[:, None] * current.normal
+        weights = np.where(keep, np.minimum(strength, np.percentile(strength[keep], 90)), 0.0)
+        fitted = fit_line(points, weights)
+        if fitted is None:
+            return None
+        new_line, inliers, sigma = fitted
+        # the line's visible stretch: the largest run of inliers without a long gap (stray
+        # texture edges lined up beyond the runway's end are left out), then refit on it
+        t_all = (points - new_line.point) @ new_line.direction
+        run = _largest_run(t_all, inliers, max(8.0, 0.15 * length))
+        if run.sum() < 3:
+            return None
+        fitted = fit_line(np.where(run[:, None], points, np.nan), np.where(run, weights, 0.0))
+        if fitted is None:
+            return None
+        new_line, inliers, sigma = fitted
+        # keep the direction of travel of the prediction
+        if new_line.direction @ current.direction < 0:
+            new_line = PixelLine(new_line.point, -new_line.direction)
+        residuals = new_line.distance(points[inliers])
+        t_in = (points[inliers] - new_line.point) @ new_line.direction
+        n_in = int(inliers.sum())
+        if n_in < 3:
+            return None
+        rms = float(np.sqrt(np.mean(residuals ** 2)))
+        spread = float(np.sum((t_in - t_in.mean()) ** 2))
+        t_profiles = (centres - new_line.point) @ new_line.direction
+        in_span = np.count_nonzero((t_profiles >= t_in.min() - 0.5) & (t_profiles <= t_in.max() + 0.5))
+        sigma_fit = max(rms, 0.05)
+        found_polarity = int(polarity) if polarity else int(np.sign(np.nanmedian(
+            _signed_step(profiles[inliers], offsets))) or 1)
+        result = LineFit(
+            line=new_line, residual_px=rms, support=n_in / max(in_span, 1),
+            contrast=float(np.median(contrast[inliers])), polarity=found_polarity,
+            extent=(float(t_in.min()), float(t_in.max())),
+            sigma_offset_px=sigma_fit / math.sqrt(n_in),
+            sigma_angle_rad=sigma_fit / math.sqrt(spread) if spread > 0 else math.inf,
+            n_inliers=n_in, points=points[inliers])
+        # the next pass samples the same span around the fitted line, in a narrower band
+        t = t_profiles
+        current = new_line
+        halfwidth = max(2.5, halfwidth / 2.0)
+    return result
+
+
+def _largest_run(t: np.ndarray, mask: np.ndarray, max_gap: float) -> np.ndarray:
+    """Mask of the masked positions forming the most populated run with gaps <= max_gap."""
+    chosen = np.zeros(len(t), dtype=bool)
+    idx = np.nonzero(mask)[0]
+    if len(idx) == 0:
+        return chosen
+    order = idx[np.argsort(t[idx])]
+    breaks = np.nonzero(np.diff(t[order]) > max_gap)[0]
+    starts = np.concatenate([[0], breaks + 1])
+    ends = np.concatenate([breaks + 1, [len(order)]])
+    best = int(np.argmax(ends - starts))
+    chosen[order[starts[best]:ends[best]]] = True
+    return chosen
+
+
+def _signed_step(profiles: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Mean grey level on the +normal half minus the -normal half of each profile."""
+    half = len(offsets) // 2
+    return np.nanmean(profiles[:, half + 1:], axis=1) - np.nanmean(profiles[:, :half], axis=1)

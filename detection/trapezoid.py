@@ -1,0 +1,273 @@
+"""The symmetry/trapezoid model: which lines are the runway's left edge, right edge and centre
+line (thesis 5.3.2.2).
+
+A runway of unknown size is a trapezoid in the image whose sides meet on the horizon. In
+horizon coordinates (:mod:`visland.detection.horizon`: s along the horizon, d below it) its
+three lines are ``s = s0 + k d`` with one ``s0`` (the vanishing point V1 on the horizon) and
+``k_C = (k_L + k_R) / 2`` (the centre line is the harmonic conjugate of the horizon with
+respect to the edges: midway between them along any line parallel to the horizon).
+
+The model works in two steps:
+
+1. Vanishing point candidates: every checked candidate line proposes the point where it
+   meets the horizon; proposals that agree are pooled and ranked by the evidence of their
+   lines (the runway's edges, its centre line and markings, and whatever runs along it:
+   taxiways, roads, field boundaries, all meet there).
+2. For each candidate point, the frame is resampled on the lines through it
+   (:mod:`visland.detection.pencil`), where every line through the point is a column, and
+   the steps along columns are found. A runway is a pair of steps of opposite signs (the
+   same two materials on mirrored sides) that overlap in depth, whose inside differs from
+   its outside the way the steps say (between a runway edge and a taxiway edge lies mostly
+   grass, like outside), with a stripe midway (the centre line). Pairs are ranked by the
+   strength, continuity and symmetry of both edges, the centre stripe, the width (of
+   parallel paved strips the runway is the widest: a taxiway is half as wide) and agreement
+   with the previous frame's runway when there is one.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from visland.detection.candidates import CandidateLines
+from visland.detection.horizon import HorizonFrame
+from visland.detection.params import DetectorParams
+from visland.detection.pencil import PencilEdges, PencilImage, pencil_edges, rectify
+
+__all__ = ["Prediction", "RunwayHypothesis", "vanishing_point_candidates", "runway_hypotheses"]
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """The runway expected in this frame (from the previous detection), horizon coordinates."""
+
+    s0: float
+    k_left: float
+    k_right: float
+    d_far: float
+    d_near: float
+    sigma_px: float
+
+
+@dataclass(frozen=True)
+class RunwayHypothesis:
+    """A left/right edge pair through one horizon point, with its evidence."""
+
+    s0: float
+    k_left: float
+    k_right: float
+    d_far: float
+    d_near: float
+    polarity_left: int
+    polarity_right: int
+    score: float
+    centre_polarity: int
+    centre_support: float
+    evidence: dict
+
+    @property
+    def k_centre(self) -> float:
+        return 0.5 * (self.k_left + self.k_right)
+
+
+def vanishing_point_candidates(lines: CandidateLines, params: DetectorParams, max_points: int = 4,
+                               prediction: Prediction | None = None) -> list[tuple[float, float, tuple, tuple]]:
+    """Points of the horizon where several checked lines meet, best first.
+
+    Returns ``(s0, weight, (k_min, k_max), (d_min, d_max))`` per point: the lines' slopes and
+    depths, to bound the search around it. A prediction is always a candidate.
+    """
+    out = []
+    usable = (lines.support >= 0.3) & (lines.contrast >= params.min_contrast) if len(lines) else np.zeros(0, bool)
+    index = np.nonzero(usable)[0]
+    if len(index):
+        s0 = lines.s0[index]
+        weight = lines.contrast[index] * lines.support[index] * np.minimum(
+            (lines.d_b[index] - lines.d_a[index]) * np.sqrt(1 + lines.k[index] ** 2), 200.0)
+        tolerance = params.vp_tolerance_px + 2.0 * lines.sigma_s0[index]
+        # each line's vote, spread over its tolerance; a point's score sums the lines it holds
+        held = np.abs(s0[:, None] - s0[None, :]) <= np.maximum(tolerance[:, None], tolerance[None, :])
+        score = held.astype(float) @ weight
+        taken = np.zeros(len(index), bool)
+        for i in np.argsort(-score):
+            if taken[i]:
+                continue
+            members = held[i] & ~taken
+            taken |= held[i]
+            w = weight[members]
+            centre = float(np.average(s0[members], weights=w))
+            j = index[members]
+            out.append((centre, float(score[i]), (float(lines.k[j].min()), float(lines.k[j].max())),
+                        (float(lines.d_a[j].min()), float(lines.d_b[j].max()))))
+            if len(out) >= max_points:
+                break
+    if prediction is not None:
+        out = [p for p in out if abs(p[0] - prediction.s0) > params.vp_tolerance_px]
+        out.insert(0, (prediction.s0, math.inf, (prediction.k_left, prediction.k_right),
+                       (prediction.d_far, prediction.d_near)))
+    return out
+
+
+def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, params: DetectorParams,
+                      prediction: Prediction | None = None, max_hypotheses: int = 6,
+                      bottom_depth_px: float = math.inf) -> list[RunwayHypothesis]:
+    """Rank left/right edge pairs by the trapezoid model and the image evidence (best first)."""
+    hypotheses = []
+    points = vanishing_point_candidates(lines, params, prediction=prediction,
+                                        max_points=2 if prediction is not None else 4)
+    for s0, _, (k_min, k_max), (d_min, d_max) in points:
+        margin_k = 0.3 if prediction is not None else 1.0
+        k_range = (max(-params.max_edge_slope, k_min - margin_k), min(params.max_edge_slope, k_max + margin_k))
+        span = max(d_max - d_min, 8.0)
+        d_range = (max(1.0, d_min - 0.3 * span), min(bottom_depth_px, d_max + 0.5 * span))
+        rect = rectify(image, horizon, s0, k_range, d_range)
+        if rect is None:
+            continue
+        edges = pencil_edges(rect, min_step=0.5 * params.min_contrast)
+        hypotheses.extend(_pairs(rect, edges, params, prediction, horizon.camera.fx))
+    hypotheses.sort(key=lambda h: -h.score)
+    hypotheses = _prefer_enclosing(hypotheses)
+    return hypotheses[:max_hypotheses]
+
+
+def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
+           prediction: Prediction | None, rect_focal_px: float) -> list[RunwayHypothesis]:
+    """Left/right pairs among the steps of one rectified image, scored."""
+    n = len(edges)
+    if n < 2:
+        return []
+    L, R = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    ok = (edges.k[L] < edges.k[R]) & (edges.polarity[L] == -edges.polarity[R])
+    d_far = np.maximum(edges.d_a[L], edges.d_a[R])
+    d_near = np.minimum(edges.d_b[L], edges.d_b[R])
+    ok &= d_near > d_far
+    ok &= (edges.k[R] - edges.k[L]) * d_near >= 3.0
+    # a runway is a long strip: with d = f h / x (x the distance ahead, h the height) and
+    # W / h = k_R - k_L, the strip seen from depth d_far to d_near is
+    # L / W = f (d_near - d_far) / ((k_R - k_L) d_near d_far) long (truncated spans only
+    # shorten it)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        length_to_width = rect_focal_px * (d_near - d_far) / ((edges.k[R] - edges.k[L]) * d_near * d_far)
+    ok &= length_to_width >= params.min_length_to_width
+    li, ri = L[ok], R[ok]
+    if len(li) == 0:
+        return []
+    far, near = d_far[ok], d_near[ok]
+    c_l, c_r = edges.contrast[li], edges.contrast[ri]
+    symmetry = np.minimum(c_l, c_r) / np.maximum(c_l, c_r)
+    width = edges.k[ri] - edges.k[li]
+    k_c = 0.5 * (edges.k[li] + edges.k[ri])
+    length = (near - far) * np.sqrt(1 + k_c ** 2)
+    length_term = 1.0 - np.exp(-length / 30.0)
+    prior = np.ones(len(li))
+    if prediction is not None:
+        depths = np.array([max(prediction.d_far, 1.0), max(prediction.d_near, 1.0)])
+        s_pred_l = prediction.s0 + prediction.k_left * depths
+        s_pred_r = prediction.s0 + prediction.k_right * depths
+        gap_l = np.abs(rect.s0 + edges.k[li][:, None] * depths - s_pred_l).max(axis=1)
+        gap_r = np.abs(rect.s0 + edges.k[ri][:, None] * depths - s_pred_r).max(axis=1)
+        prior = np.exp(-0.5 * (np.maximum(gap_l, gap_r) / prediction.sigma_px) ** 2)
+    # width: among parallel paved strips the runway is the widest, but a random wide pair must
+    # not win by width alone, so it only weighs as a square root
+    pre_score = np.sqrt(width) * length_term * np.minimum(c_l, c_r) * (0.5 + symmetry) * prior
+    hypotheses = []
+    for p in np.argsort(-pre_score)[:24]:
+        if pre_score[p] <= 0:
+            continue
+        inside = _inside_evidence(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p])
+        contrast = max(float(min(c_l[p], c_r[p])), 1.0)
+        # inside darker than outside when the left edge darkens towards +s, and vice versa;
+        # a runway's inside differs from its outside by about its edges' step
+        expected = -1.0 if edges.polarity[li[p]] < 0 else 1.0
+        interior_term = float(np.clip(expected * inside["interior"] / contrast, 0.0, 1.0))
+        if interior_term <= 0.1:
+            continue
+        step = max(abs(inside["interior"]), contrast)
+        outside_term = float(np.clip(1.0 - abs(inside["outside_gap"]) / step, 0.0, 1.0))
+        uniform_term = float(np.clip(1.0 - inside["spread"] / (2.0 * step), 0.1, 1.0))
+        # a painted centre line (white; a dark stripe counts half)
+        centre_term = inside["centre_rows"] * (1.0 if inside["centre_polarity"] > 0 else 0.5)
+        score = float(pre_score[p] * interior_term * (0.3 + outside_term) * uniform_term * (0.5 + centre_term))
+        centre_polarity = inside["centre_polarity"]
+        hypotheses.append(RunwayHypothesis(
+            s0=rect.s0, k_left=float(edges.k[li[p]]), k_right=float(edges.k[ri[p]]), d_far=float(far[p]),
+            d_near=float(near[p]), polarity_left=int(edges.polarity[li[p]]),
+            polarity_right=int(edges.polarity[ri[p]]), score=score, centre_polarity=int(centre_polarity),
+            centre_support=centre_term,
+            evidence={"symmetry": float(symmetry[p]), "contrast": contrast, "interior": inside["interior"],
+                      "outside_gap": inside["outside_gap"], "spread": inside["spread"],
+                      "centre_rows": inside["centre_rows"], "prior": float(prior[p]), "length_px": float(length[p]),
+                      "width_k": float(width[p])}))
+    return hypotheses
+
+
+def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: float, d_near: float) -> dict:
+    """What lies between and beside a pair of edges, from the rectified image.
+
+    Returns a dict: ``interior`` (median grey inside minus outside), ``outside_gap`` (median
+    grey outside the left edge minus outside the right edge), ``spread`` (interquartile range
+    inside), ``centre_polarity`` and ``centre_rows`` (fraction of rows holding a stripe on
+    the midline). A runway's inside is one surface (markings in the minority) with the same
+    ground on both sides; its centre line is a stripe in most rows (dashes included), where
+    texture would make one in a few.
+    """
+    empty = {"interior": 0.0, "outside_gap": math.inf, "spread": math.inf, "centre_polarity": 0, "centre_rows": 0.0}
+    rows = rect.rows_between(d_far, d_near)
+    if rows.sum() < 2:
+        return empty
+    block = rect.values[rows]
+    width = k_right - k_left
+
+    def columns(f_lo, f_hi):
+        c = rect.column_of([k_left + f_lo * width, k_left + f_hi * width])
+        return slice(int(min(c)), int(max(c)) + 1)
+
+    def values(*parts):
+        v = np.concatenate([block[:, part].ravel() for part in parts])
+        return v[np.isfinite(v)]
+
+    inside = values(columns(0.12, 0.42), columns(0.58, 0.88))
+    out_left, out_right = values(columns(-0.4, -0.12)), values(columns(1.12, 1.4))
+    if inside.size < 4 or out_left.size < 4 or out_right.size < 4:
+        return empty
+    q25, q50, q75 = np.percentile(inside, [25, 50, 75])
+    m_left, m_right = float(np.median(out_left)), float(np.median(out_right))
+    result = {"interior": float(q50 - 0.5 * (m_left + m_right)), "outside_gap": m_left - m_right,
+              "spread": float(q75 - q25), "centre_polarity": 0, "centre_rows": 0.0}
+    # centre stripe: per row, the mean within 1.5 % of the width of the midline against the
+    # mean from 4 to 8 % on either side
+    centre = int(rect.column_of(0.5 * (k_left + k_right)))
+    half = max(1, int(round(0.015 * width / rect.k_step)))
+    inner = max(half + 1, int(round(0.04 * width / rect.k_step)))
+    outer = max(inner + 1, int(round(0.08 * width / rect.k_step)))
+    if centre - outer < 0 or centre + outer >= block.shape[1]:
+        return result
+    with np.errstate(invalid="ignore"):
+        mid = np.nanmean(block[:, centre - half:centre + half + 1], axis=1)
+        sides = 0.5 * (np.nanmean(block[:, centre - outer:centre - inner + 1], axis=1)
+                       + np.nanmean(block[:, centre + inner:centre + outer + 1], axis=1))
+    ridge = mid - sides
+    ridge = ridge[np.isfinite(ridge)]
+    if ridge.size < 2:
+        return result
+    threshold = max(2.0, 0.2 * abs(result["interior"]))
+    bright, dark = float(np.mean(ridge > threshold)), float(np.mean(ridge < -threshold))
+    result["centre_polarity"], result["centre_rows"] = (1, bright) if bright >= dark else (-1, dark)
+    return result
+
+
+def _prefer_enclosing(hypotheses: list[RunwayHypothesis]) -> list[RunwayHypothesis]:
+    """Move ahead of a hypothesis any that encloses it with the same midline and a comparable
+    score: the runway's outer boundary rather than the inner edges of its side stripes."""
+    if len(hypotheses) < 2:
+        return hypotheses
+    best = hypotheses[0]
+    width = best.k_right - best.k_left
+    for other in hypotheses[1:]:
+        other_width = other.k_right - other.k_left
+        if (abs(other.s0 - best.s0) < 1e-6 and other.k_left < best.k_left and other.k_right > best.k_right
+                and abs(other.k_centre - best.k_centre) < 0.15 * width
+                and other_width < 1.4 * width and other.score >= 0.25 * best.score):
+            return [other] + [h for h in hypotheses if h is not other]
+    return hypotheses
