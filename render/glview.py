@@ -207,7 +207,7 @@ def _make_renderer_class():
 
         def _update_context(self, scene, flags):
             super()._update_context(scene, flags)
-            if self.anisotropy > 1.0:
+            if self.anisotropy > 1.0:  # hardware anisotropic filtering (slow on llvmpipe), off by default
                 for texture in self._mesh_textures:
                     if texture._texid is not None and texture._texid not in self._anisotropic_ids:
                         GL.glBindTexture(GL.GL_TEXTURE_2D, texture._texid)

@@ -71,8 +71,7 @@ class FrameRenderer:
         self._view = None
         try:
             write_shaders(self._shader_dir, params, runway.heading_deg)
-            self._view = OffscreenView(camera, self._shader_dir, samples=params.msaa_samples,
-                                       anisotropy=params.anisotropy)
+            self._view = OffscreenView(camera, self._shader_dir, samples=params.msaa_samples, anisotropy=1.0)
             self._handles = build_scene(runway, params)
         except BaseException:
             self.close()

@@ -213,7 +213,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
         def ground_uv(x, y):
             return (x - (centre[0] - extent / 2)) / extent, (y - (centre[1] - extent / 2)) / extent
 
-        ground_material = _material(_texture(fields, _REPEAT), _texture(grass, _REPEAT), 1.0 / 16.0, 0.9)
+        ground_material = _material(_texture(fields, _REPEAT), _texture(grass, _REPEAT), 1.0 / 16.0, 0.8)
         scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, ground_uv), material=ground_material))
 
     # ------------------------------------------------------------ runway tiles
@@ -245,7 +245,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
             material = _material(kind=3, colour=(1.0, 1.0, 1.0))
             scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
         else:
-            material = _material(_texture(image, _CLAMP), detail_pavement, 1.0 / 8.0, 0.8)
+            material = _material(_texture(image, _CLAMP), detail_pavement, 1.0 / 8.0, 0.8, kind=4)
             scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(cells, tile_uv), material=material))
 
     # ------------------------------------------------------------ strips and apron
@@ -280,7 +280,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
                     return y / period, (x - rx0) / (rx1 - rx0)
             meshes.append(_quads_mesh(cell[None, :], uv))
         mesh = trimesh.util.concatenate(meshes)
-        material = _material(_texture(strip_textures[material_name], _REPEAT), detail_pavement, 1.0 / 8.0, 0.6)
+        material = _material(_texture(strip_textures[material_name], _REPEAT), detail_pavement, 1.0 / 8.0, 0.6, kind=4)
         scene.add(pyrender.Mesh.from_trimesh(mesh, material=material))
 
     # ------------------------------------------------------------ buildings

@@ -11,7 +11,9 @@ material's ``emissive_factor`` as ``(detail_per_m, detail_strength, kind)``:
 - ``kind`` 1 (sky dome): sky colour from the view direction (gradient, sun glow), clouds from
   the base texture projected on a cloud layer, no haze;
 - ``kind`` 2 (buildings): base colour lit by the sun through the face normal, then haze;
-- ``kind`` 3 (flat test scenes): base colour exactly, no light, no haze.
+- ``kind`` 3 (flat test scenes): base colour exactly, no light, no haze;
+- ``kind`` 4 (pavements: runway, taxiways, roads): as 0, with the base texture filtered
+  anisotropically in the shader (up to ``SceneParams.anisotropy`` taps along the footprint).
 
 Haze follows Koschmieder: transmittance ``exp(-3.0 d / V)`` over distance ``d`` for a
 meteorological optical range ``V`` (5 % contrast), blended towards the horizon sky colour.
@@ -107,6 +109,7 @@ const float EXTINCTION = @EXTINCTION@;                     // 1/m
 const float CLOUD_COVER = @CLOUD_COVER@;
 const float CLOUD_HEIGHT = 1800.0;
 const float CLOUD_SCALE = 9000.0;
+const float MAX_TAPS = @MAX_TAPS@;
 
 vec3 sky_colour(vec3 dir)
 {
@@ -116,6 +119,29 @@ vec3 sky_colour(vec3 dir)
     float c = max(dot(dir, SUN_DIR), 0.0);
     sky += SUN_COLOUR * (0.10 * pow(c, 6.0) + 0.35 * pow(c, 200.0));
     return sky;
+}
+
+// Anisotropic filtering for the pavement textures only (kind 4): up to MAX_TAPS mipmapped taps
+// along the longer axis of the pixel footprint. llvmpipe's built-in anisotropic filtering costs
+// about a second per frame; the pavements cover a small part of the image.
+vec4 sample_anisotropic(sampler2D tex, vec2 uv)
+{
+    vec2 size = vec2(textureSize(tex, 0));
+    vec2 ddx = dFdx(uv);
+    vec2 ddy = dFdy(uv);
+    float lx = length(ddx * size);
+    float ly = length(ddy * size);
+    vec2 major = lx > ly ? ddx : ddy;
+    vec2 minor = lx > ly ? ddy : ddx;
+    float ratio = max(lx, ly) / max(min(lx, ly), 1e-6);
+    float taps = clamp(ceil(ratio), 1.0, MAX_TAPS);
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < int(MAX_TAPS); i++) {
+        if (float(i) >= taps) break;
+        float t = (float(i) + 0.5) / taps - 0.5;
+        sum += textureGrad(tex, uv + major * t, major / taps, minor);
+    }
+    return sum / taps;
 }
 
 vec3 haze(vec3 colour)
@@ -150,15 +176,22 @@ void main()
         return;
     }
 #ifdef HAS_BASE_COLOR_TEX
-    base *= texture(material.base_color_texture, uv_0);
+    if (kind == 4) {
+        base *= sample_anisotropic(material.base_color_texture, uv_0);
+    } else {
+        base *= texture(material.base_color_texture, uv_0);
+    }
 #endif
     if (kind == 3) {
         frag_color = vec4(clamp(base.rgb, 0.0, 1.0), 1.0);
         return;
     }
 #ifdef HAS_EMISSIVE_TEX
-    vec3 detail = texture(material.emissive_texture, frag_position.xy * material.emissive_factor.x).rgb;
-    base.rgb *= mix(vec3(1.0), 2.0 * detail, material.emissive_factor.y);
+    // the detail texture at two incommensurate scales: its tiling does not show
+    vec2 p_detail = frag_position.xy * material.emissive_factor.x;
+    vec3 detail = texture(material.emissive_texture, p_detail).rgb;
+    vec3 detail_large = texture(material.emissive_texture, p_detail * 0.1731 + vec2(0.37, 0.61)).rgb;
+    base.rgb *= mix(vec3(1.0), 4.0 * detail * detail_large, material.emissive_factor.y);
 #endif
     float light;
     if (kind == 2) {
@@ -213,6 +246,7 @@ def write_shaders(folder, params: SceneParams, runway_heading_deg: float) -> Pat
         "@AMBIENT@": "0.56", "@SUN_GAIN@": "0.56",
         "@EXTINCTION@": f"{2.996 / params.visibility_m:.9e}",
         "@CLOUD_COVER@": f"{params.cloud_cover:.4f}",
+        "@MAX_TAPS@": f"{float(params.anisotropy):.1f}",
     }
     fragment = _FRAGMENT
     for key, value in replacements.items():

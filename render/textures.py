@@ -168,11 +168,6 @@ def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_
     roofs = np.where(speck[:, None] < 0.35, np.array([150.0, 92.0, 76.0], np.float32),
                      np.array([128.0, 126.0, 118.0], np.float32))
     image[built] = roofs * (0.85 + 0.3 * speck[:, None])
-    # hedges and tracks on field boundaries
-    du = np.abs(u - strip_edges[strip])
-    dv = np.abs(vv - field_edges[strip, field].astype(np.float32))
-    hedge = (np.minimum(du, dv) < 0.8 * texel) & (rng.random((size, size)) < 0.7)
-    image[hedge] = np.array([58.0, 76.0, 40.0], np.float32)
     # mown airport grass, with mowing stripes
     x0, x1, y0, y1 = airport_rect_m
     inside = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
