@@ -21,7 +21,7 @@ from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import LineFit, PixelLine, refine_line
 from visland.detection.result import DetectionResult, not_found
-from visland.detection.transverse import find_transverse_line
+from visland.detection.transverse import find_transverse_line, surface_extent
 from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
 
@@ -375,10 +375,23 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi):
     bottom_depth = _deepest_visible(horizon, width, height)
     edges_reach_border = d_near >= bottom_depth - 3.0
     min_step = params.min_contrast
-    near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_near,
+    # threshold stripes and the strip before them span about a runway width along the runway
+    # (ICAO: 36 m on a 45 m runway): in depth, width_px * d / fx at depth d
+    width_slope = abs(k_r - k_l)
+    # where the runway's surface ends (more reliable than where its edges fade)
+    # the edges' slopes as lines through the fused vanishing point, at mid depth
+    k_l_vp = (s0_l + k_l * d_mid - s0_vp) / d_mid
+    k_r_vp = (s0_r + k_r * d_mid - s0_vp) / d_mid
+    extent = surface_extent(ctx.image, horizon, s0_vp, k_l_vp, k_r_vp, (d_far, d_near), (max(1.0, d_far - params.threshold_search_fraction * depth_span),
+                                              min(bottom_depth, d_near + params.threshold_search_fraction * depth_span)))
+    d_near_expected, d_far_expected = d_near, d_far
+    if extent is not None:
+        d_far_expected, d_near_expected = extent
+    near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_near_expected,
                                 (d_near - params.threshold_search_fraction * depth_span,
                                  d_near + params.threshold_search_fraction * depth_span),
-                                outward=1, min_step=min_step)
+                                outward=1, min_step=min_step,
+                                marking_reach_px=1.0 * width_slope * d_near * d_near / camera.fx + 2.0)
     if near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
     else:
@@ -389,10 +402,11 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi):
                 corners_found[index] = True
         if not corners_found[:2].all():
             notes.append("a threshold corner lies outside the image")
-    far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far,
+    far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
                                (max(0.5, d_far - params.threshold_search_fraction * depth_span),
                                 d_far + params.threshold_search_fraction * depth_span),
-                               outward=-1, min_step=min_step)
+                               outward=-1, min_step=min_step,
+                               marking_reach_px=1.0 * width_slope * d_far * d_far / camera.fx + 2.0)
     if far is None:
         notes.append("runway end not found")
     else:

@@ -23,9 +23,10 @@ import cv2
 import numpy as np
 
 from visland.detection.horizon import HorizonFrame
+from visland.detection.pencil import rectify
 from visland.detection.refine import PixelLine
 
-__all__ = ["TransverseLine", "find_transverse_line"]
+__all__ = ["TransverseLine", "find_transverse_line", "surface_extent"]
 
 
 @dataclass(frozen=True)
@@ -54,6 +55,55 @@ class TransverseLine:
     significance: float
 
 
+def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_right: float,
+                   d_support: tuple, d_window: tuple, step_d_px: float = 0.5) -> tuple[float, float] | None:
+    """Depths ``(d_far, d_near)`` where the runway's surface ends, from rows of the frame
+    resampled on lines through the vanishing point.
+
+    A row belongs to the runway while the surface between the edges differs from the ground
+    beside them as it does in the middle of the edges' support (``d_support``). Markings are
+    bright on a dark runway (dark on a bright one): the surface is read as the lower quartile
+    of the row between the edges when the runway is darker than its surroundings, the upper
+    quartile otherwise, so threshold stripes and numbers do not end it early.
+    """
+    width = k_right - k_left
+    rect = rectify(image, horizon, s0, (k_left - 0.4 * width, k_right + 0.4 * width), d_window,
+                   max_rows=int(max(8, (d_window[1] - d_window[0]) / step_d_px) + 1), max_columns=256,
+                   pixel_step=max(0.5, width * d_window[1] / 120.0))
+    if rect is None:
+        return None
+    f = (rect.k - k_left) / width
+    inside = (f >= 0.1) & (f <= 0.9)
+    outside = ((f >= -0.38) & (f <= -0.12)) | ((f >= 1.12) & (f <= 1.38))
+    with np.errstate(invalid="ignore"):
+        out_level = np.nanmedian(rect.values[:, outside], axis=1)
+        low = np.nanpercentile(rect.values[:, inside], 25, axis=1)
+        high = np.nanpercentile(rect.values[:, inside], 75, axis=1)
+    core = (rect.d >= d_support[0] + 0.2 * (d_support[1] - d_support[0])) & \
+        (rect.d <= d_support[1] - 0.2 * (d_support[1] - d_support[0]))
+    if core.sum() < 2:
+        return None
+    darker = np.nanmedian(low[core] - out_level[core]) < 0
+    contrast = (low - out_level) if darker else (high - out_level)
+    reference = np.nanmedian(contrast[core])
+    if not np.isfinite(reference) or abs(reference) < 2.0:
+        return None
+    runway = np.nan_to_num(contrast * np.sign(reference)) > 0.5 * abs(reference)
+    # majority over three rows, then the run of runway rows holding the core
+    padded = np.concatenate([[runway[0]], runway, [runway[-1]]]).astype(int)
+    runway = (padded[:-2] + padded[1:-1] + padded[2:]) >= 2
+    centre = int(np.nonzero(core)[0][len(np.nonzero(core)[0]) // 2])
+    if not runway[centre]:
+        return None
+    lo = centre
+    while lo > 0 and runway[lo - 1]:
+        lo -= 1
+    hi = centre
+    while hi < len(runway) - 1 and runway[hi + 1]:
+        hi += 1
+    return float(rect.d[lo]), float(rect.d[hi])
+
+
 def _meet(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:
     p = np.cross(line_a, line_b)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -62,19 +112,23 @@ def _meet(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:
 
 def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                          d_expected: float, d_window: tuple, outward: int, min_step: float,
-                         n_columns: int = 48, step_d_px: float = 0.5, min_significance: float = 6.0
-                         ) -> TransverseLine | None:
+                         marking_reach_px: float = 2.0, n_columns: int = 48, step_d_px: float = 0.5,
+                         min_significance: float = 2.5) -> TransverseLine | None:
     """Locate the threshold (``outward = +1``: outside is at larger depth) or the runway end
     (``outward = -1``) near depth ``d_expected`` within ``d_window = (d_min, d_max)``.
 
+    The step nearest ``d_expected`` (weighted by its strength) is taken, then, while a step
+    of the opposite sign follows outwards within ``marking_reach_px`` (pixels of depth), the
+    boundary moves out to it: the threshold stripes are a bright band that ends 6 m before
+    the threshold, and the runway's boundary is the last step before the outside.
+
     Returns None when no step stands out of the profile's noise by ``min_significance`` or
-    reaches ``min_step`` grey levels.
+    reaches a quarter of ``min_step`` grey levels per pixel.
     """
     d_min, d_max = (float(x) for x in d_window)
     if not (math.isfinite(d_min) and math.isfinite(d_max)) or d_max - d_min < 6 * step_d_px:
         return None
     v2 = horizon.perpendicular_vanishing_point_h(s0)
-    vp = horizon.vanishing_point_uv(s0)
     line_left, line_right = left.homogeneous(), right.homogeneous()
     # the centre line: through V1, midway between the edges along lines parallel to the horizon
     d_ref = max(d_expected, 1.0)
@@ -120,36 +174,38 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     g = np.where(valid, g, 0.0)
     magnitude = np.abs(g)
     noise = 1.4826 * np.median(np.abs(magnitude - np.median(magnitude))) + 1e-3
-    peaks = np.nonzero((magnitude[1:-1] >= magnitude[:-2]) & (magnitude[1:-1] > magnitude[2:]))[0] + 1
-    # a step's height: difference of the means over a few pixels on each side
-    span = max(2, int(round(2.0 / step_d_px)))
-
-    def step_height(i):
-        outside = smooth[i + span:i + 2 * span + 1] if outward > 0 else smooth[max(0, i - 2 * span):i - span + 1]
-        runway = smooth[max(0, i - 2 * span):i - span + 1] if outward > 0 else smooth[i + span:i + 2 * span + 1]
-        if len(outside) == 0 or len(runway) == 0:
-            return 0.0
-        return float(np.mean(runway) - np.mean(outside))
-
-    good = [i for i in peaks if magnitude[i] / noise >= min_significance and abs(step_height(i)) >= min_step]
-    if not good:
+    peaks = np.nonzero((magnitude[1:-1] >= magnitude[:-2]) & (magnitude[1:-1] > magnitude[2:])
+                       & (magnitude[1:-1] >= min_significance * noise)
+                       & (magnitude[1:-1] >= min_step * 0.25))[0] + 1
+    if len(peaks) == 0:
         return None
-    # the outermost step that is not much weaker than the strongest near the expected depth
-    strongest = max(magnitude[i] for i in good)
-    good = [i for i in good if magnitude[i] >= 0.2 * strongest]
-    chosen = max(good) if outward > 0 else min(good)
-    delta = 0.0
-    left_m, centre_m, right_m = magnitude[chosen - 1], magnitude[chosen], magnitude[chosen + 1]
-    denominator = left_m - 2 * centre_m + right_m
-    if abs(denominator) > 1e-9:
-        delta = float(np.clip(0.5 * (left_m - right_m) / denominator, -0.5, 0.5))
-    depth = float(depths[chosen] + delta * step_d_px)
+    # the step nearest where the edges end, weighted by its strength ...
+    sigma_d = max(2.0, 0.04 * d_expected)
+    score = magnitude[peaks] * np.exp(-0.5 * ((depths[peaks] - d_expected) / sigma_d) ** 2)
+    chosen = int(peaks[np.argmax(score)])
+    # ... then outwards through painted bands (threshold stripes, the strip before them):
+    # while a step of the opposite sign follows within reach, the boundary lies further out
+    reach = max(2, int(round(marking_reach_px / step_d_px)))
+    for _ in range(3):
+        sign = np.sign(g[chosen])
+        ahead = np.arange(chosen + 2 * outward, chosen + outward * (reach + 1), outward)
+        ahead = ahead[(ahead > 0) & (ahead < len(g) - 1)]
+        candidates = [i for i in ahead if i in set(peaks.tolist()) and np.sign(g[i]) == -sign
+                      and magnitude[i] >= 0.25 * magnitude[chosen]]
+        if not candidates:
+            break
+        chosen = int(candidates[0] if len(candidates) == 1 else max(candidates, key=lambda i: magnitude[i]))
+    # sub-pixel: centroid of the step's derivative lobe within a pixel of its peak
+    half = max(1, int(round(1.0 / step_d_px)))
+    idx = np.arange(max(0, chosen - half), min(len(g), chosen + half + 1))
+    w = np.maximum(np.sign(g[chosen]) * g[idx], 0.0)
+    depth = float(np.sum(w * depths[idx]) / np.sum(w)) if w.sum() > 0 else float(depths[chosen])
     centre_point = horizon.pencil_point(s0, k_centre, depth)
     line_h = np.cross(np.array([centre_point[0], centre_point[1], 1.0]), v2)
     line_h = line_h / np.linalg.norm(line_h[:2])
     return TransverseLine(line_h=line_h, corner_left_uv=_meet(line_h, line_left),
                           corner_right_uv=_meet(line_h, line_right), depth_px=depth,
-                          step=step_height(chosen), significance=float(magnitude[chosen] / noise))
+                          step=float(g[chosen]), significance=float(magnitude[chosen] / noise))
 
 
 def _horizon_parallel(horizon: HorizonFrame, depth: float) -> np.ndarray:
