@@ -52,6 +52,31 @@ def _headline(summary: dict) -> dict:
     return out
 
 
+def _cmd_campaign(args) -> int:
+    import json
+    from visland.datasets.campaign import CampaignOptions, parse_scenario_list, run_campaign
+    options = CampaignOptions(scenarios=tuple(parse_scenario_list(args.scenarios)), size=args.size, fps=args.fps,
+                              sources=tuple(dict.fromkeys(args.sources)), observers=_observers(args.observer),
+                              seed=args.seed, workers=args.workers, scheduler=args.scheduler)
+    summary = run_campaign(options, args.out, force=args.force)
+    print(json.dumps(_headline(summary)))
+    return 0
+
+
+def _cmd_demo(args) -> int:
+    """The README's main job: a short campaign on one approach, then where to look."""
+    import json
+    from visland.datasets.campaign import CampaignOptions, run_campaign
+    options = CampaignOptions(scenarios=("thesis-1",), size=args.size, fps=args.fps,
+                              sources=("detection", "tracking"), observers=_observers(["all"]),
+                              seed=0, workers=args.workers)
+    print(f"visland demo: thesis-1 (thesis Table 5.2 No.1) rendered at {args.size}x{args.size}, {args.fps:g} Hz; "
+          f"runway detection and point tracking; every observer. Output: {args.out}/")
+    summary = run_campaign(options, args.out, force=args.force)
+    print(json.dumps(_headline(summary)))
+    return 0
+
+
 def register(subparsers):
     """Add this stage's commands to the visland parser."""
     p = subparsers.add_parser(
@@ -89,3 +114,34 @@ def register(subparsers):
     p.add_argument("runs", nargs="+", metavar="RUN", help="output folders of 'visland process'")
     p.add_argument("--out", required=True, metavar="DIR", help="folder for the tables and plots")
     p.set_defaults(func=_cmd_compare)
+
+    p = subparsers.add_parser(
+        "campaign", help="generate, process and compare several scenarios in one command (resumable)",
+        description="Generate the datasets of several scenarios, process each with the chosen measurement "
+                    "sources and every observer, and compare them (thesis Tables 5.14-5.17 form). Resumable: "
+                    "run the same command again after an interruption. With --scheduler, frames render and "
+                    "runs process on a Dask cluster.")
+    p.add_argument("--scenarios", nargs="+", default=["thesis-1..thesis-8"], metavar="NAMES",
+                   help="scenario names, ranges such as thesis-1..thesis-8, or TOML files (default thesis-1..thesis-8)")
+    p.add_argument("--out", required=True, metavar="DIR", help="campaign folder (resumed if it holds the same campaign)")
+    p.add_argument("--size", type=int, default=2048, metavar="PX", help="image size (default 2048)")
+    p.add_argument("--fps", type=float, default=25.0, help="frame rate (default 25)")
+    p.add_argument("--sources", nargs="+", choices=("detection", "tracking", "anchored", "ideal"),
+                   default=["detection", "tracking", "anchored"], help="measurement sources (default all three)")
+    p.add_argument("--observer", nargs="+", metavar="NAME", help=OBSERVER_HELP)
+    p.add_argument("--seed", type=int, default=0, help="seed of every random generator (default 0)")
+    p.add_argument("--workers", type=int, default=2, metavar="N", help="local rendering processes (default 2)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--force", action="store_true", help="reuse a folder holding another campaign")
+    p.set_defaults(func=_cmd_campaign)
+
+    p = subparsers.add_parser(
+        "demo", help="the README's main job: one approach rendered, measured, estimated and compared",
+        description="Run a short campaign on thesis-1 (render, detect, track, every observer, compare) and "
+                    "print where the tables and the HTML reports are. Resumable like 'campaign'.")
+    p.add_argument("--out", default="visland-demo", metavar="DIR", help="output folder (default ./visland-demo)")
+    p.add_argument("--size", type=int, default=1024, metavar="PX", help="image size (default 1024)")
+    p.add_argument("--fps", type=float, default=25.0, help="frame rate (default 25)")
+    p.add_argument("--workers", type=int, default=2, metavar="N", help="local rendering processes (default 2)")
+    p.add_argument("--force", action="store_true", help="reuse a folder holding another campaign")
+    p.set_defaults(func=_cmd_demo)

@@ -21,6 +21,7 @@ STAGE_CLI_MODULES = (
     "visland.detection.cli",
     "visland.tracking.cli",
     "visland.estimation.cli",
+    "visland.datasets.generate_cli",
     "visland.datasets.cli",
 )
 

@@ -1,0 +1,184 @@
+"""``visland campaign``: generate, process and compare a set of scenarios in one command.
+
+Layout of the campaign folder::
+
+    DIR/campaign.json                 what was asked (scenarios, size, fps, sources, observers)
+    DIR/datasets/<scenario>/          ``visland generate`` output (resumable)
+    DIR/runs/<scenario>-<source>/     ``visland process`` output
+    DIR/compare/                      ``visland compare`` of every run (tables, plots)
+
+Resumable: run the same command again after an interruption. Finished datasets are kept
+(``generate`` resumes a half-rendered one frame by frame), runs whose ``run.json`` records
+the same dataset and options are kept, and the comparison is rebuilt. A campaign folder made
+with other settings is refused unless ``--force``. With ``--scheduler``, frames render on the
+Dask cluster and the runs are processed there as one task each.
+"""
+from __future__ import annotations
+
+import json
+import re
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from visland.contracts import atomic_write_text
+
+__all__ = ["CampaignOptions", "run_campaign", "parse_scenario_list"]
+
+_RANGE = re.compile(r"^(?P<prefix>.*?)(?P<a>\d+)\.\.(?P=prefix)?(?P<b>\d+)$")
+
+
+def parse_scenario_list(items) -> list[str]:
+    """Expand ``thesis-1..thesis-8`` (or ``thesis-1..8``) and comma-separated names; keep order."""
+    from visland.scenarios import BUILTIN_SCENARIOS
+    out: list[str] = []
+    for item in items:
+        for part in filter(None, (p.strip() for p in str(item).split(","))):
+            match = _RANGE.match(part)
+            if match:
+                a, b = int(match["a"]), int(match["b"])
+                if b < a:
+                    raise ValueError(f"--scenarios: range '{part}' runs backwards")
+                names = [f"{match['prefix']}{k}" for k in range(a, b + 1)]
+            else:
+                names = [part]
+            for name in names:
+                if name not in BUILTIN_SCENARIOS and not Path(name).is_file():
+                    raise ValueError(f"--scenarios: unknown scenario '{name}'; known: {', '.join(BUILTIN_SCENARIOS)} "
+                                     "(or a .toml scenario file)")
+                if name not in out:
+                    out.append(name)
+    if not out:
+        raise ValueError("--scenarios: give at least one scenario")
+    return out
+
+
+@dataclass(frozen=True)
+class CampaignOptions:
+    """What a campaign runs (see ``visland campaign --help``)."""
+
+    scenarios: tuple
+    size: int = 2048
+    fps: float = 25.0
+    sources: tuple = ("detection",)
+    observers: tuple = ()
+    seed: int = 0
+    workers: int = 1
+    scheduler: str | None = None
+    scene: dict = field(default_factory=dict)
+
+    def settings(self) -> dict:
+        """What must match for a campaign folder to be resumed (not workers nor scheduler)."""
+        data = asdict(self)
+        data.pop("workers")
+        data.pop("scheduler")
+        data["scenarios"] = list(self.scenarios)
+        data["sources"] = list(self.sources)
+        data["observers"] = list(self.observers)
+        return data
+
+
+def _dataset_ready(folder: Path) -> bool:
+    return (folder / "manifest.json").exists()
+
+
+def _run_is_current(run_dir: Path, dataset: Path, source: str, observers: tuple) -> bool:
+    info = run_dir / "run.json"
+    if not info.exists():
+        return False
+    try:
+        data = json.loads(info.read_text())
+        manifest = (dataset / "manifest.json").stat().st_mtime
+    except (json.JSONDecodeError, OSError):
+        return False
+    return (data.get("source") == source and list(data.get("observers", [])) == list(observers)
+            and info.stat().st_mtime >= manifest)
+
+
+def _process_task(dataset: str, run_dir: str, source: str, observers: tuple) -> str:
+    """One processing job (module-level so that Dask can ship it to a worker)."""
+    from visland.datasets.process import ProcessOptions, process_input
+    lines: list[str] = []
+    process_input(dataset, run_dir, ProcessOptions(source=source, observers=observers, quiet=True), force=True,
+                  echo=lines.append)
+    return "\n".join(lines)
+
+
+def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=print) -> dict:
+    """Generate every scenario, process it with every source, compare everything."""
+    from visland.camera import CameraModel
+    from visland.cli import simulation_options_from_args
+    from visland.datasets.compare import compare_runs
+    from visland.datasets.generate import GenerateJob, generate_dataset
+    from visland.datasets.process import DEFAULT_OBSERVERS
+    from visland.render.params import SceneParams
+    from visland.scenarios import resolve_scenario
+
+    out = Path(out_dir)
+    observers = tuple(options.observers) or DEFAULT_OBSERVERS
+    settings = options.settings()
+    settings["observers"] = list(observers)
+    marker = out / "campaign.json"
+    if marker.exists() and not force:
+        stored = json.loads(marker.read_text())
+        if stored != settings:
+            differing = sorted(k for k in settings if stored.get(k) != settings[k])
+            raise ValueError(f"{out}: holds a campaign with other settings ({', '.join(differing)}); "
+                             "use another --out or --force")
+    elif out.exists() and any(out.iterdir()) and not marker.exists() and not force:
+        raise ValueError(f"{out}: folder exists and is not a campaign folder; use another --out or --force")
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(marker, json.dumps(settings, indent=2) + "\n")
+
+    started = time.perf_counter()
+    scene = SceneParams.from_dict(options.scene) if options.scene else SceneParams()
+
+    class _Args:      # the simulation options a campaign fixes (the same flags as `visland simulate`)
+        fps = options.fps
+        seed = options.seed
+        calibration_error = 0.0
+        velocity_bias = 0.0
+        imu_noise = 0.0
+
+    datasets = {}
+    for name in options.scenarios:
+        scenario = resolve_scenario(name)
+        sim_options = simulation_options_from_args(_Args, camera=CameraModel.default(options.size))
+        job = GenerateJob(scenario=scenario, options=sim_options, scene=scene)
+        folder = out / "datasets" / scenario.name
+        echo(f"[{time.perf_counter() - started:6.0f} s] generate {scenario.name} ({options.size} px, {options.fps:g} Hz)")
+        report = generate_dataset(job, folder, workers=options.workers, scheduler=options.scheduler, force=False)
+        echo(f"         {report.n_frames} frames: {report.rendered} rendered, {report.reused} kept, "
+             f"{report.seconds:.0f} s")
+        datasets[scenario.name] = folder
+
+    todo = []
+    runs = []
+    for name, dataset in datasets.items():
+        for source in options.sources:
+            run_dir = out / "runs" / f"{name}-{source}"
+            runs.append(run_dir)
+            if _run_is_current(run_dir, dataset, source, observers):
+                echo(f"         {run_dir.name}: up to date, kept")
+            else:
+                todo.append((str(dataset), str(run_dir), source, observers))
+    if options.scheduler and todo:
+        from dask.distributed import Client
+        echo(f"[{time.perf_counter() - started:6.0f} s] process {len(todo)} runs on {options.scheduler}")
+        with Client(options.scheduler) as client:
+            futures = [client.submit(_process_task, *task, pure=False) for task in todo]
+            for task, text in zip(todo, client.gather(futures)):
+                echo(f"         {Path(task[1]).name}: " + (text.splitlines()[-2] if text.count("\n") else text))
+    else:
+        for task in todo:
+            echo(f"[{time.perf_counter() - started:6.0f} s] process {Path(task[1]).name}")
+            text = _process_task(*task)
+            summary = [line for line in text.splitlines() if "frames: runway found" in line]
+            echo("         " + (summary[0] if summary else text.splitlines()[-1]))
+
+    echo(f"[{time.perf_counter() - started:6.0f} s] compare {len(runs)} runs")
+    summary = compare_runs(runs, out / "compare", echo=lambda text: None)
+    echo((out / "compare" / "compare.md").read_text())
+    echo(f"campaign done in {time.perf_counter() - started:.0f} s: {out}/compare/compare.md, "
+         f"reports in {out}/runs/*/report.html")
+    return summary
