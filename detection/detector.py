@@ -108,10 +108,16 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
         if prediction is None:
             tracking_reason = "previous runway not in view after the attitude change"
         else:
-            result, why = _search(context, roi, params.tracking_max_side_px, prediction, "tracking")
+            # first the predicted edges refined directly against the gradient (the runway moves
+            # a few pixels per frame); then, if they do not hold, Hough candidates in the region
+            # of interest; the whole frame only if both fail
+            result, why = _measure(context, _hypothesis_of(prediction), "tracking", roi, prediction=prediction)
             if result is not None:
                 return result
-            tracking_reason = why
+            result, why_roi = _search(context, roi, params.tracking_max_side_px, prediction, "tracking")
+            if result is not None:
+                return result
+            tracking_reason = f"{why}; in the region of interest: {why_roi}"
     mode = "acquisition" if tracking_reason is None else "reacquisition"
     result, why = _search(context, ground, params.acquisition_max_side_px, None, mode)
     if result is not None:
@@ -194,6 +200,12 @@ def _predict(previous: DetectionResult, ctx: _Context, ground):
     return prediction, roi
 
 
+def _hypothesis_of(prediction: Prediction) -> RunwayHypothesis:
+    return RunwayHypothesis(s0=prediction.s0, k_left=prediction.k_left, k_right=prediction.k_right,
+                            d_far=prediction.d_far, d_near=prediction.d_near, polarity_left=0, polarity_right=0,
+                            score=1.0, centre_polarity=0, centre_support=0.0, evidence={"predicted": True})
+
+
 def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
     """Candidates in ``roi``, the trapezoid model, then measurement of the best hypotheses."""
     params, horizon = ctx.params, ctx.horizon
@@ -234,8 +246,9 @@ def _image_span(line: PixelLine, width: int, height: int, margin: float = 1.0) -
     return (lo, hi) if hi > lo else (math.nan, math.nan)
 
 
-def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slope: float) -> LineFit | None:
-    """Sub-pixel edge along the pencil line (s0, k), searched a little beyond its candidate span.
+def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slope: float,
+                 halfwidth_px: float) -> LineFit | None:
+    """Sub-pixel edge along the pencil line (s0, k) between depths ``d_far`` and ``d_near``.
 
     ``outward_s`` is the side (in s) of the runway's outside; ``width_slope`` the runway's width
     per pixel of depth (``k_R - k_L``): a painted side stripe up to 4 % of the local width
@@ -247,9 +260,7 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
     d_ref = 0.5 * (d_far + d_near)
     line = _pencil_pixel_line(horizon, s0, k, d_ref)
     scale = math.sqrt(1 + k * k)
-    d_lo = max(1.0, d_far - 0.25 * span)
-    d_hi = d_near + 0.35 * span
-    t_lo, t_hi = (d_lo - d_ref) * scale, (d_hi - d_ref) * scale
+    t_lo, t_hi = (max(1.0, d_far) - d_ref) * scale, (d_near - d_ref) * scale
     img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, params.search_halfwidth_px + 4)
     t_lo, t_hi = max(t_lo, img_lo), min(t_hi, img_hi)
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi - t_lo < params.min_edge_length_px:
@@ -262,7 +273,7 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
         return 0.04 * abs(width_slope) * depth / scale + 1.5
 
     return refine_line(ctx.image, line, (t_lo, t_hi), "edge", polarity=0,
-                       halfwidth_px=params.search_halfwidth_px, n_samples=params.refine_samples,
+                       halfwidth_px=halfwidth_px, n_samples=params.refine_samples,
                        iterations=params.refine_iterations, min_contrast=params.min_contrast,
                        outward=outward_s * sign, outward_reach_px=reach)
 
@@ -310,13 +321,28 @@ def _fuse_vanishing_point(horizon: HorizonFrame, fits, sigma_horizon_px: float) 
     return np.linalg.solve(A, b)
 
 
-def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi):
-    """Refine a hypothesis into a measurement, or say why it fails."""
+def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, prediction: Prediction | None = None):
+    """Refine a hypothesis into a measurement, or say why it fails.
+
+    With a ``prediction`` (tracking straight from the previous frame), the edges are searched
+    in a band as wide as the prediction's uncertainty and must land within it.
+    """
     horizon, params, camera = ctx.horizon, ctx.params, ctx.camera
     fits = {}
     width_slope = hypothesis.k_right - hypothesis.k_left
+    halfwidth = params.search_halfwidth_px if prediction is None else max(params.search_halfwidth_px,
+                                                                          prediction.sigma_px)
+    bottom_depth = _deepest_visible(horizon, camera.width, camera.height)
+    # where the strip's surface starts and ends, before fitting its edges there (beyond its
+    # ends, texture lined up with an edge would turn the fit)
+    span = max(hypothesis.d_near - hypothesis.d_far, 4.0)
+    extent = surface_extent(ctx.image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
+                            (hypothesis.d_far, hypothesis.d_near),
+                            (max(1.0, hypothesis.d_far - 0.5 * span), min(bottom_depth, hypothesis.d_near + 0.5 * span)))
+    d_lo, d_hi = (hypothesis.d_far, hypothesis.d_near) if extent is None else extent
+    inset = 0.03 * (d_hi - d_lo)
     for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
-        fit = _refine_edge(ctx, hypothesis.s0, k, hypothesis.d_far, hypothesis.d_near, outward, width_slope)
+        fit = _refine_edge(ctx, hypothesis.s0, k, d_lo + inset, d_hi - inset, outward, width_slope, halfwidth)
         if fit is None:
             return None, f"{name} edge: no consistent grey-level step along the candidate line"
         length = fit.extent[1] - fit.extent[0]
@@ -326,6 +352,13 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi):
             return None, f"{name} edge: only {100 * fit.support:.0f} % of its profiles hold the edge"
         if fit.residual_px > params.max_line_residual_px:
             return None, f"{name} edge: not straight (RMS residual {fit.residual_px:.2f} px)"
+        if prediction is not None:
+            depths = np.array([max(prediction.d_far, 1.0), prediction.d_near])
+            s0_fit, k_fit, _ = _pencil_of(horizon, fit)
+            k_pred = prediction.k_left if name == "left" else prediction.k_right
+            moved = np.abs((s0_fit + k_fit * depths) - (prediction.s0 + k_pred * depths)).max()
+            if not moved <= 2.5 * prediction.sigma_px:
+                return None, f"{name} edge: {moved:.0f} px from its prediction"
         fits[name] = fit
     s0_l, k_l, sig_l = _pencil_of(horizon, fits["left"])
     s0_r, k_r, sig_r = _pencil_of(horizon, fits["right"])
@@ -372,7 +405,6 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi):
     threshold_line = end_line = (math.nan, math.nan)
     depth_span = d_near - d_far
     width, height = camera.width, camera.height
-    bottom_depth = _deepest_visible(horizon, width, height)
     edges_reach_border = d_near >= bottom_depth - 3.0
     min_step = params.min_contrast
     # threshold stripes and the strip before them span about a runway width along the runway

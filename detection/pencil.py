@@ -26,7 +26,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame
 
-__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges"]
+__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile"]
 
 
 @dataclass(frozen=True)
@@ -76,42 +76,71 @@ class PencilEdges:
     d_a: np.ndarray
     d_b: np.ndarray
     support: np.ndarray
+    bands: np.ndarray = None            # (b, 2) depth ranges of the bands
+    band_profiles: np.ndarray = None    # (b, m) mean grey level of each column over each band
 
     def __len__(self) -> int:
         return len(self.k)
 
+    def band_means(self, band_weights: np.ndarray, k_rect: np.ndarray, k_lo: np.ndarray,
+                   k_hi: np.ndarray) -> np.ndarray:
+        """Mean grey level between slopes ``k_lo`` and ``k_hi`` (one pair of limits per row of
+        ``band_weights`` (n, b)), averaged over bands with those weights (cumulative sums:
+        cheap for many pairs at once)."""
+        P = self.band_profiles
+        valid = np.isfinite(P)
+        C = np.concatenate([np.zeros((len(P), 1)), np.cumsum(np.where(valid, P, 0.0), axis=1)], axis=1)
+        N = np.concatenate([np.zeros((len(P), 1)), np.cumsum(valid, axis=1)], axis=1)
+        step = k_rect[1] - k_rect[0]
+        j0 = np.clip(np.rint((k_lo - k_rect[0]) / step).astype(int), 0, P.shape[1])
+        j1 = np.clip(np.rint((k_hi - k_rect[0]) / step).astype(int) + 1, 0, P.shape[1])
+        sums = C[:, j1].T - C[:, j0].T                 # (n, b)
+        counts = N[:, j1].T - N[:, j0].T
+        with np.errstate(invalid="ignore", divide="ignore"):
+            per_band = sums / counts
+        w = np.where(np.isfinite(per_band), band_weights, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return (np.nan_to_num(per_band) * w).sum(axis=1) / w.sum(axis=1)
+
 
 def rectify(image, horizon: HorizonFrame, s0: float, k_range: tuple, d_range: tuple,
-            max_rows: int = 160, max_columns: int = 4096, pixel_step: float = 0.5) -> PencilImage | None:
+            max_rows: int = 160, max_columns: int = 4096, pixel_step: float = 0.5,
+            geometric_rows: bool = False) -> PencilImage | None:
     """Resample ``image`` on lines through the horizon point ``s0``.
 
     Columns are spaced so that neighbouring columns are ``pixel_step`` pixels apart at the
-    deepest row; rows are one pixel apart (at most ``max_rows``).
+    deepest row; rows are one pixel apart (at most ``max_rows``), or with ``geometric_rows``
+    spaced in proportion to their depth (the same relative resolution near the horizon,
+    where a runway is small, as near the image bottom).
     """
     d_lo, d_hi = max(float(d_range[0]), 1.0), float(d_range[1])
     k_lo, k_hi = float(k_range[0]), float(k_range[1])
     if not (d_hi > d_lo + 2 and k_hi > k_lo):
         return None
     n_rows = int(min(max_rows, max(8, math.ceil(d_hi - d_lo) + 1)))
-    d = np.linspace(d_lo, d_hi, n_rows)
+    d = np.geomspace(d_lo, d_hi, n_rows) if geometric_rows else np.linspace(d_lo, d_hi, n_rows)
     k_step = pixel_step / d_hi
     n_cols = int(math.ceil((k_hi - k_lo) / k_step)) + 1
     if n_cols > max_columns:
         n_cols = max_columns
         k_step = (k_hi - k_lo) / (n_cols - 1)
     k = k_lo + k_step * np.arange(n_cols)
-    uv = horizon.pencil_point(s0, k[None, :], d[:, None])                  # (r, m, 2)
+    # pixel = Q + (s0 + k d) t + d n, built by broadcasting rows and columns (float32)
+    q, t, n = horizon.q_uv, horizon.t_uv, horizon.n_uv
+    d32, k32 = d.astype(np.float32)[:, None], k.astype(np.float32)[None, :]
+    u = np.float32(q[0] + s0 * t[0]) + (d32 * np.float32(t[0])) * k32 + d32 * np.float32(n[0])
+    v = np.float32(q[1] + s0 * t[1]) + (d32 * np.float32(t[1])) * k32 + d32 * np.float32(n[1])
     height, width = image.shape
-    inside = (uv[..., 0] >= 0) & (uv[..., 0] <= width - 1) & (uv[..., 1] >= 0) & (uv[..., 1] <= height - 1)
+    inside = (u >= 0) & (u <= width - 1) & (v >= 0) & (v <= height - 1)
     if not inside.any():
         return None
-    u0 = int(max(0, math.floor(uv[..., 0][inside].min()) - 1))
-    v0 = int(max(0, math.floor(uv[..., 1][inside].min()) - 1))
-    u1 = int(min(width, math.ceil(uv[..., 0][inside].max()) + 2))
-    v1 = int(min(height, math.ceil(uv[..., 1][inside].max()) + 2))
+    u0 = int(max(0, math.floor(float(u[inside].min())) - 1))
+    v0 = int(max(0, math.floor(float(v[inside].min())) - 1))
+    u1 = int(min(width, math.ceil(float(u[inside].max())) + 2))
+    v1 = int(min(height, math.ceil(float(v[inside].max())) + 2))
     crop = np.asarray(image[v0:v1, u0:u1], dtype=np.float32)
-    map_u = np.where(inside, uv[..., 0] - u0, -10.0).astype(np.float32)
-    map_v = np.where(inside, uv[..., 1] - v0, -10.0).astype(np.float32)
+    map_u = np.where(inside, u - np.float32(u0), np.float32(-10.0))
+    map_v = np.where(inside, v - np.float32(v0), np.float32(-10.0))
     values = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     values = np.where(inside, values, np.nan).astype(np.float32)
     return PencilImage(float(s0), k, d, values)
@@ -144,14 +173,17 @@ def pencil_edges(rect: PencilImage, min_step: float, band_ratio: float = 1.35,
         bands.append((lo, hi))
         lo = hi
     values = rect.values
-    for b_lo, b_hi in bands:
+    profiles = np.full((len(bands), values.shape[1]), np.nan)
+    for index, (b_lo, b_hi) in enumerate(bands):
         rows = (d >= b_lo) & (d <= b_hi)
         if rows.sum() < 2:
             edges_of_bands.append((np.zeros(0, int), np.zeros(0)))
             continue
-        with np.errstate(invalid="ignore"):
-            counts = np.isfinite(values[rows]).sum(axis=0)
-            profile = np.where(counts >= 0.5 * rows.sum(), np.nanmean(values[rows], axis=0), np.nan)
+        counts = np.isfinite(values[rows]).sum(axis=0)
+        total = np.where(np.isfinite(values[rows]), values[rows], 0.0).sum(axis=0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            profile = np.where(counts >= 0.5 * rows.sum(), total / counts, np.nan)
+        profiles[index] = profile
         # difference over about +-0.75 px at the band's middle depth
         half = max(1, int(round(0.75 / (rect.k_step * 0.5 * (b_lo + b_hi)))))
         edges_of_bands.append(_band_edges(profile, half, min_step))
@@ -191,8 +223,20 @@ def pencil_edges(rect: PencilImage, min_step: float, band_ratio: float = 1.35,
                     bands[min(band_ids)][0], bands[max(band_ids)][1], len(members) / (max(band_ids) - min(band_ids) + 1)))
         if len(out) >= max_edges:
             break
+    band_array = np.array(bands, dtype=float).reshape(-1, 2)
     if not out:
         z = np.zeros(0)
-        return PencilEdges(rect.s0, z, z.astype(int), z, z, z, z)
+        return PencilEdges(rect.s0, z, z.astype(int), z, z, z, z, band_array, profiles)
     a = np.array(out)
-    return PencilEdges(rect.s0, a[:, 0], a[:, 1].astype(int), a[:, 2], a[:, 3], a[:, 4], a[:, 5])
+    return PencilEdges(rect.s0, a[:, 0], a[:, 1].astype(int), a[:, 2], a[:, 3], a[:, 4], a[:, 5], band_array,
+                       profiles)
+
+
+def row_quantile(values: np.ndarray, q: float) -> np.ndarray:
+    """Quantile ``q`` of each row ignoring NaN (NaN where a row has none): vectorised, unlike
+    ``np.nanpercentile`` along an axis."""
+    ordered = np.sort(values, axis=1)                      # NaN sort last
+    count = np.isfinite(ordered).sum(axis=1)
+    index = np.clip(np.floor(q * (count - 1) + 0.5).astype(int), 0, values.shape[1] - 1)
+    out = ordered[np.arange(len(ordered)), index]
+    return np.where(count > 0, out, np.nan)

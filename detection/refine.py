@@ -370,7 +370,7 @@ def stripe_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
 
 
 def fit_line(points: np.ndarray, weights: np.ndarray, min_sigma_px: float = 0.05,
-             iterations: int = 6) -> tuple[PixelLine, np.ndarray, float] | None:
+             iterations: int = 4) -> tuple[PixelLine, np.ndarray, float] | None:
     """Weighted total-least-squares line with Tukey biweight re-weighting.
 
     Returns ``(line, inlier mask, robust sigma)`` or None with fewer than 3 usable points.
@@ -381,23 +381,25 @@ def fit_line(points: np.ndarray, weights: np.ndarray, min_sigma_px: float = 0.05
     if usable.sum() < 3:
         return None
     pts, w0 = pts[usable], w0[usable]
-    w = w0.copy()
+    w = w0
     line, sigma = None, math.inf
     for _ in range(iterations):
         total = w.sum()
         if total <= 0:
             return None
-        centroid = (w[:, None] * pts).sum(axis=0) / total
+        centroid = (w @ pts) / total
         rel = pts - centroid
-        cov = (w[:, None, None] * rel[:, :, None] * rel[:, None, :]).sum(axis=0) / total
-        eigenvalues, eigenvectors = np.linalg.eigh(cov)
-        direction = eigenvectors[:, 1]
-        line = PixelLine(centroid, direction)
+        sxx = (w * rel[:, 0] ** 2).sum() / total
+        syy = (w * rel[:, 1] ** 2).sum() / total
+        sxy = (w * rel[:, 0] * rel[:, 1]).sum() / total
+        # principal axis of the 2x2 scatter matrix (closed form)
+        angle = 0.5 * math.atan2(2.0 * sxy, sxx - syy)
+        line = PixelLine(centroid, np.array([math.cos(angle), math.sin(angle)]))
         r = rel @ line.normal
-        mad = np.median(np.abs(r[w > 0] - np.median(r[w > 0]))) if np.any(w > 0) else 0.0
+        active = r[w > 0]
+        mad = float(np.median(np.abs(active - np.median(active)))) if active.size else 0.0
         sigma = max(1.4826 * mad, min_sigma_px)
-        c = 4.685 * sigma
-        u = r / c
+        u = r / (4.685 * sigma)
         w = w0 * np.where(np.abs(u) < 1.0, (1 - u ** 2) ** 2, 0.0)
     inliers_usable = w > 0
     mask = np.zeros(len(usable), dtype=bool)

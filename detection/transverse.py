@@ -23,7 +23,7 @@ import cv2
 import numpy as np
 
 from visland.detection.horizon import HorizonFrame
-from visland.detection.pencil import rectify
+from visland.detection.pencil import rectify, row_quantile
 from visland.detection.refine import PixelLine
 
 __all__ = ["TransverseLine", "find_transverse_line", "surface_extent"]
@@ -76,9 +76,9 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     inside = (f >= 0.1) & (f <= 0.9)
     outside = ((f >= -0.38) & (f <= -0.12)) | ((f >= 1.12) & (f <= 1.38))
     with np.errstate(invalid="ignore"):
-        out_level = np.nanmedian(rect.values[:, outside], axis=1)
-        low = np.nanpercentile(rect.values[:, inside], 25, axis=1)
-        high = np.nanpercentile(rect.values[:, inside], 75, axis=1)
+        out_level = row_quantile(rect.values[:, outside], 0.5)
+        low = row_quantile(rect.values[:, inside], 0.25)
+        high = row_quantile(rect.values[:, inside], 0.75)
     core = (rect.d >= d_support[0] + 0.2 * (d_support[1] - d_support[0])) & \
         (rect.d <= d_support[1] - 0.2 * (d_support[1] - d_support[0]))
     if core.sum() < 2:

@@ -33,7 +33,7 @@ import numpy as np
 from visland.detection.candidates import CandidateLines
 from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
-from visland.detection.pencil import PencilEdges, PencilImage, pencil_edges, rectify
+from visland.detection.pencil import PencilEdges, PencilImage, pencil_edges, rectify, row_quantile
 
 __all__ = ["Prediction", "RunwayHypothesis", "vanishing_point_candidates", "runway_hypotheses"]
 
@@ -117,22 +117,31 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
     points = vanishing_point_candidates(lines, params, prediction=prediction,
                                         max_points=2 if prediction is not None else 4)
     for s0, _, (k_min, k_max), (d_min, d_max) in points:
-        margin_k = 0.3 if prediction is not None else 1.0
-        k_range = (max(-params.max_edge_slope, k_min - margin_k), min(params.max_edge_slope, k_max + margin_k))
-        span = max(d_max - d_min, 8.0)
-        d_range = (max(1.0, d_min - 0.3 * span), min(bottom_depth_px, d_max + 0.5 * span))
-        rect = rectify(image, horizon, s0, k_range, d_range)
+        # the lines that found the point need not be the runway's (a taxiway, a field boundary
+        # along it): search every slope, unless tracking a predicted runway
+        if prediction is not None:
+            k_range = (max(-params.max_edge_slope, k_min - 0.3), min(params.max_edge_slope, k_max + 0.3))
+        else:
+            k_range = (-params.max_edge_slope, params.max_edge_slope)
+        if prediction is not None:
+            span = max(d_max - d_min, 8.0)
+            d_range = (max(1.0, d_min - 0.3 * span), min(bottom_depth_px, d_max + 0.5 * span))
+            rect = rectify(image, horizon, s0, k_range, d_range)
+        else:   # the whole ground below the point, rows in proportion to depth
+            rect = rectify(image, horizon, s0, k_range, (2.0, min(bottom_depth_px, 4096.0)), max_rows=200,
+                           geometric_rows=True)
         if rect is None:
             continue
-        edges = pencil_edges(rect, min_step=0.5 * params.min_contrast)
-        hypotheses.extend(_pairs(rect, edges, params, prediction, horizon.camera.fx))
+        edges = pencil_edges(rect, min_step=0.5 * params.min_contrast, max_edges=120)
+        hypotheses.extend(_pairs(rect, edges, params, prediction, horizon.camera.fx, bottom_depth_px))
     hypotheses.sort(key=lambda h: -h.score)
     hypotheses = _prefer_enclosing(hypotheses)
     return hypotheses[:max_hypotheses]
 
 
 def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
-           prediction: Prediction | None, rect_focal_px: float) -> list[RunwayHypothesis]:
+           prediction: Prediction | None, rect_focal_px: float,
+           bottom_depth_px: float = math.inf) -> list[RunwayHypothesis]:
     """Left/right pairs among the steps of one rectified image, scored."""
     n = len(edges)
     if n < 2:
@@ -168,9 +177,22 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
         gap_l = np.abs(rect.s0 + edges.k[li][:, None] * depths - s_pred_l).max(axis=1)
         gap_r = np.abs(rect.s0 + edges.k[ri][:, None] * depths - s_pred_r).max(axis=1)
         prior = np.exp(-0.5 * (np.maximum(gap_l, gap_r) / prediction.sigma_px) ** 2)
-    # width: among parallel paved strips the runway is the widest, but a random wide pair must
-    # not win by width alone, so it only weighs as a square root
-    pre_score = np.sqrt(width) * length_term * np.minimum(c_l, c_r) * (0.5 + symmetry) * prior
+    # inside against both outsides from the band profiles, for every pair at once: a runway's
+    # inside differs from the ground beside it, the same on both sides
+    overlap = np.clip(np.minimum(near[:, None], edges.bands[None, :, 1])
+                      - np.maximum(far[:, None], edges.bands[None, :, 0]), 0.0, None)
+    band_w = overlap / np.maximum(edges.bands[None, :, 1] - edges.bands[None, :, 0], 1e-9)
+    k_l, k_r = edges.k[li], edges.k[ri]
+    inside = 0.5 * (edges.band_means(band_w, rect.k, k_l + 0.12 * width, k_c - 0.05 * width)
+                    + edges.band_means(band_w, rect.k, k_c + 0.05 * width, k_r - 0.12 * width))
+    out_l = edges.band_means(band_w, rect.k, k_l - 0.4 * width, k_l - 0.12 * width)
+    out_r = edges.band_means(band_w, rect.k, k_r + 0.12 * width, k_r + 0.4 * width)
+    expected = np.where(edges.polarity[li] < 0, -1.0, 1.0)
+    contrast_min = np.maximum(np.minimum(c_l, c_r), 1.0)
+    quick_interior = np.nan_to_num(np.clip(expected * (inside - 0.5 * (out_l + out_r)) / contrast_min, 0.0, 1.0))
+    quick_outside = np.nan_to_num(np.clip(1.0 - np.abs(out_l - out_r) / contrast_min, 0.0, 1.0))
+    pre_score = (length_term * np.minimum(c_l, c_r) * (0.5 + symmetry) * prior * quick_interior
+                 * (0.3 + quick_outside) * np.sqrt(width))
     hypotheses = []
     for p in np.argsort(-pre_score)[:24]:
         if pre_score[p] <= 0:
@@ -188,7 +210,15 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
         uniform_term = float(np.clip(1.0 - inside["spread"] / (2.0 * step), 0.1, 1.0))
         # a painted centre line (white; a dark stripe counts half)
         centre_term = inside["centre_rows"] * (1.0 if inside["centre_polarity"] > 0 else 0.5)
-        score = float(pre_score[p] * interior_term * (0.3 + outside_term) * uniform_term * (0.5 + centre_term))
+        # width: among parallel paved strips the runway is the widest (a taxiway is about half
+        # as wide, a road a fifth), but a wide pair of unrelated lines must not win by width
+        width_term = float(width[p]) ** 0.5
+        # a runway is a finite strip: it ends (threshold, runway end) inside the image, where a
+        # road or a field boundary runs on to the horizon and out of the frame
+        ends = _strip_ends(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p], bottom_depth_px)
+        ends_term = 0.4 + 0.3 * ends
+        score = float(pre_score[p] * interior_term * (0.3 + outside_term) * uniform_term * (0.5 + centre_term)
+                      * width_term * ends_term)
         centre_polarity = inside["centre_polarity"]
         hypotheses.append(RunwayHypothesis(
             s0=rect.s0, k_left=float(edges.k[li[p]]), k_right=float(edges.k[ri[p]]), d_far=float(far[p]),
@@ -197,7 +227,8 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
             centre_support=centre_term,
             evidence={"symmetry": float(symmetry[p]), "contrast": contrast, "interior": inside["interior"],
                       "outside_gap": inside["outside_gap"], "spread": inside["spread"],
-                      "centre_rows": inside["centre_rows"], "prior": float(prior[p]), "length_px": float(length[p]),
+                      "centre_rows": inside["centre_rows"], "ends": ends, "prior": float(prior[p]),
+                      "length_px": float(length[p]),
                       "width_k": float(width[p])}))
     return hypotheses
 
@@ -255,6 +286,52 @@ def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: fl
     bright, dark = float(np.mean(ridge > threshold)), float(np.mean(ridge < -threshold))
     result["centre_polarity"], result["centre_rows"] = (1, bright) if bright >= dark else (-1, dark)
     return result
+
+
+def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, d_near: float,
+                bottom_depth_px: float) -> int:
+    """How many ends (0, 1, 2) the strip between two edges shows inside the rectified rows.
+
+    Row by row, the strip's surface (the lower quartile between the edges when it is darker
+    than beside it, the upper quartile otherwise) is compared with the ground beside it;
+    the run of rows that look like the strip's middle is followed outwards, and an end is
+    counted where it stops with rows beyond it that look like the ground, before the
+    horizon and the image bottom.
+    """
+    width = k_right - k_left
+    f = (rect.k - k_left) / width
+    inside = (f >= 0.1) & (f <= 0.9)
+    outside = ((f >= -0.38) & (f <= -0.12)) | ((f >= 1.12) & (f <= 1.38))
+    if inside.sum() < 2 or outside.sum() < 2:
+        return 0
+    with np.errstate(invalid="ignore"):
+        out_level = row_quantile(rect.values[:, outside], 0.5)
+        low = row_quantile(rect.values[:, inside], 0.25)
+        high = row_quantile(rect.values[:, inside], 0.75)
+    core = rect.rows_between(d_far + 0.2 * (d_near - d_far), d_near - 0.2 * (d_near - d_far))
+    if core.sum() < 1:
+        core = rect.rows_between(d_far, d_near)
+    if core.sum() < 1:
+        return 0
+    darker = np.nanmedian(low[core] - out_level[core]) < 0
+    contrast = (low - out_level) if darker else (high - out_level)
+    reference = float(np.nanmedian(contrast[core]))
+    if not math.isfinite(reference) or reference == 0.0:
+        return 0
+    strip = np.nan_to_num(contrast * np.sign(reference), nan=-1.0) > 0.5 * abs(reference)
+    ground = np.nan_to_num(contrast * np.sign(reference), nan=1e9) < 0.25 * abs(reference)
+    rows = np.nonzero(core)[0]
+    ends = 0
+    for start, step in ((rows[0], -1), (rows[-1], 1)):
+        i = start
+        while 0 <= i + step < len(strip) and strip[i + step]:
+            i += step
+        beyond = np.arange(i + step, i + step * 4, step)
+        beyond = beyond[(beyond >= 0) & (beyond < len(strip))]
+        limit_ok = rect.d[i] > 3.0 if step < 0 else rect.d[i] < bottom_depth_px - 3.0
+        if limit_ok and len(beyond) >= 2 and ground[beyond].mean() >= 0.5:
+            ends += 1
+    return ends
 
 
 def _prefer_enclosing(hypotheses: list[RunwayHypothesis]) -> list[RunwayHypothesis]:
