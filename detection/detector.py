@@ -73,6 +73,7 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     params = params or DetectorParams()
     if not isinstance(params, DetectorParams):
         raise ValueError(f"params must be a DetectorParams, got {type(params).__name__}")
+    params = params.scaled_to(camera.width)
     if previous is not None and not isinstance(previous, DetectionResult):
         raise ValueError(f"previous must be a DetectionResult or None, got {type(previous).__name__}")
 

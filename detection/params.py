@@ -1,9 +1,10 @@
 """DetectorParams: the one frozen parameter set of the detection stage (JSON/TOML round trip).
 
-Every number the detector uses lives here, with its unit in its name. Pixel sizes are in
-pixels of the *input* image (2048x2048 by default); the detector scales nothing by itself,
-so a user working on 1024x1024 frames halves the pixel parameters with
-:meth:`DetectorParams.scaled_to`.
+Every number the detector uses lives here, with its unit in its name. Lengths in pixels are
+for a frame ``reference_side_px`` wide (2048 by default, the SPEC camera); the detector
+rescales them to the frame it is given (:meth:`DetectorParams.scaled_to`), so one parameter
+file serves every image size. Lengths marked "working-image pixels" are in the downsampled
+image the Hough transform sees and do not scale.
 """
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ import math
 import tomllib
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
+
+import numpy as np
 
 __all__ = ["DetectorParams"]
 
@@ -86,6 +89,8 @@ class DetectorParams:
         Detections below this confidence are reported as not found.
     horizon_margin_px : float
         The horizon from roll and pitch must cross the image enlarged by this margin.
+    reference_side_px : int
+        Image width the pixel lengths above are given for.
     """
 
     acquisition_max_side_px: int = 1024
@@ -116,6 +121,7 @@ class DetectorParams:
     tracking_sigma_px: float = 12.0
     min_confidence: float = 0.35
     horizon_margin_px: float = 0.0
+    reference_side_px: int = 2048
 
     def __post_init__(self):
         def number(name, low, high, integer=False, open_low=False):
@@ -160,21 +166,30 @@ class DetectorParams:
         number("tracking_sigma_px", 0.1, 10000.0)
         number("min_confidence", 0.0, 1.0)
         number("horizon_margin_px", 0.0, 100000.0)
+        number("reference_side_px", 16, 100000, integer=True)
 
     # ----------------------------------------------------------------- variants
-    def scaled_to(self, image_side_px: int, reference_side_px: int = 2048) -> "DetectorParams":
-        """The same detector for images of another size: pixel lengths scale, counts do not."""
-        if not isinstance(image_side_px, int) or image_side_px < 16:
+    def scaled_to(self, image_side_px: int) -> "DetectorParams":
+        """The same detector for frames ``image_side_px`` wide: lengths in pixels scale, counts,
+        ratios and grey levels do not. Idempotent (the result's reference is that width)."""
+        if isinstance(image_side_px, bool) or not isinstance(image_side_px, (int, np.integer)) or image_side_px < 16:
             raise ValueError(f"image_side_px must be an integer of at least 16, got {image_side_px!r}")
-        k = image_side_px / float(reference_side_px)
-        return replace(self,
-                       acquisition_max_side_px=max(128, min(self.acquisition_max_side_px, image_side_px)),
-                       tracking_max_side_px=max(64, min(self.tracking_max_side_px, image_side_px)),
-                       min_edge_length_px=max(4.0, self.min_edge_length_px * k),
-                       roi_margin_px=self.roi_margin_px * k,
-                       horizon_sigma_px=self.horizon_sigma_px * k,
-                       tracking_sigma_px=self.tracking_sigma_px * k,
-                       vp_tolerance_px=max(0.1, self.vp_tolerance_px * k))
+        image_side_px = int(image_side_px)
+        if image_side_px == self.reference_side_px:
+            return self
+        k = image_side_px / float(self.reference_side_px)
+        return replace(
+            self,
+            reference_side_px=image_side_px,
+            acquisition_max_side_px=int(max(min(512, image_side_px), round(self.acquisition_max_side_px * k))),
+            tracking_max_side_px=int(max(min(256, image_side_px), round(self.tracking_max_side_px * k))),
+            min_edge_length_px=max(4.0, self.min_edge_length_px * k),
+            search_halfwidth_px=max(2.5, self.search_halfwidth_px * k),
+            roi_margin_px=self.roi_margin_px * k,
+            vp_tolerance_px=max(0.5, self.vp_tolerance_px * k),
+            horizon_sigma_px=max(0.05, self.horizon_sigma_px * k),
+            tracking_sigma_px=max(1.0, self.tracking_sigma_px * k),
+            horizon_margin_px=self.horizon_margin_px * k)
 
     # ----------------------------------------------------------------- files
     def to_dict(self) -> dict:
