@@ -52,6 +52,7 @@ class FolderSource(FrameSource):
         self.name = str(self.folder.root)
         self.camera = self.folder.camera
         self.times_s = self.folder.times_s
+        self.telemetry = self.folder.telemetry
         self.inertial = self.folder.inertial
         self.truth = self.folder.truth
         self.labels = self.folder.labels

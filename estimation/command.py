@@ -162,12 +162,16 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
         reasons = {}
         for f in np.nonzero(run.coasting & np.isfinite(run.dh_m))[0]:
             reasons[run.reason[f]] = reasons.get(run.reason[f], 0) + 1
+        started = run.t_s >= run.start_t_s - 1e-9
+        n_withheld = int(np.sum(started & ~np.isfinite(run.dh_m)))
         line = (f"{name}: started at t = {run.start_t_s:.2f} s from dH0 = {run.dh0_m:.1f} m; "
                 f"{n_coast} frames coasted{' (' + ', '.join(f'{n} {r}' for r, n in reasons.items()) + ')' if reasons else ''}; "
+                + (f"{n_withheld} frames withheld after a long gap; " if n_withheld else "") +
                 f"{1e6 * run.step_time_s / max(run.n_steps, 1):.0f} us/step")
         if dh_true is not None:
             m = run_metrics(run.t_s, dh_true, run.dh_m, start_t_s=run.start_t_s)
             m.update({"start_t_s": run.start_t_s, "dh0_m": run.dh0_m, "n_frames": len(run), "n_coasting": n_coast,
+                      "n_withheld": n_withheld,
                       "coasting_reasons": reasons, "params": run.params})
             metrics[name] = m
             line += (f"; conv 5% {m['conv_time_5pct_s']:.2f} s, dH err 400/200/100 ft "

@@ -3,7 +3,9 @@
 What the observers need and how it is obtained (SPEC frames, see :mod:`visland.frames`):
 
 - Heading deviation ``dpsi`` from the vanishing-point feature d_F (seed 001 eq. 18-19, for any
-  camera mounting: :func:`visland.features.dpsi_from_dF`) with the inertial roll and pitch.
+  camera mounting: :func:`visland.features.dpsi_from_dF`) with the inertial roll and pitch. A
+  frame without d_F but with all four corners (a point tracker's output) gets d_F from the
+  vanishing point of the two edges through its corners.
 - The runway heading ``psi_rwy = heading - dpsi`` is a constant: each frame gives one sample
   and the estimate is their causal running mean (circular, each frame weighted by the squared
   pixel span of the threshold: the vanishing point sharpens as the runway grows in the image),
@@ -30,9 +32,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from visland.camera import CameraModel
+from visland.camera import CameraModel, intersect_lines, line_through_points
 from visland.contracts import Table
-from visland.features import batch_R_camera_from_runway, dpsi_from_dF, virtual_from_pixels
+from visland.features import (batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF, horizon_line,
+                              virtual_from_pixels)
 from visland.frames import wrap_pi
 
 from visland.estimation.base import ObserverInput
@@ -43,6 +46,7 @@ __all__ = ["InertialSeries", "FeatureSeries", "PreparedInputs", "prepare_inputs"
 TIME_MATCH_S = 1e-6
 
 _NEAR_CORNERS = ("near_left", "near_right")
+_FAR_CORNERS = ("far_left", "far_right")
 
 
 @dataclass
@@ -119,6 +123,9 @@ class FeatureSeries:
     lines : (m, 2, 2) ``[[rho_l, theta_l], [rho_r, theta_r]]`` left and right edges, SPEC chart.
     center_line : (m, 2) ``[rho, theta]`` of the centre line.
     dF_px : (m,) vanishing-point feature d_F (SPEC), pixels.
+    far_uv_px : (m, 2, 2) pixels of the runway-end corners (far left, far right), NaN where not
+        measured; with the near corners they give the vanishing point when d_F is not measured
+        (a point tracker measures corners only).
     points_ok, lines_ok : (m,) bool, whether the frame measured both near corners / both edges.
     reason : (m,) str, why a frame measured nothing ("" when it did).
     """
@@ -131,11 +138,14 @@ class FeatureSeries:
     points_ok: np.ndarray
     lines_ok: np.ndarray
     reason: np.ndarray = field(default=None)
+    far_uv_px: np.ndarray = field(default=None)
 
     def __post_init__(self):
         m = len(self.t_s)
         if self.reason is None:
             self.reason = np.full(m, "", dtype=object)
+        if self.far_uv_px is None:
+            self.far_uv_px = np.full((m, 2, 2), np.nan)
         if m < 1:
             raise ValueError("measurements: no frames")
         if np.any(np.diff(self.t_s) <= 0):
@@ -176,9 +186,14 @@ class FeatureSeries:
             elif not points_ok[i]:
                 reason[i] = "near corners not measured" if visible.all(axis=1)[i] else "near corner outside the image"
         dF = np.where(found, table["dF_px"], np.nan)
+        far = np.stack([np.stack([table[f"{c}_u_px"], table[f"{c}_v_px"]], axis=-1) for c in _FAR_CORNERS], axis=1)
+        for k, c in enumerate(_FAR_CORNERS):
+            if f"{c}_visible" in table:
+                far[:, k] = np.where((np.nan_to_num(table[f"{c}_visible"], nan=0.0) > 0.5)[:, None], far[:, k], np.nan)
+        far = np.where(found[:, None, None], far, np.nan)
         return cls(t_s=np.asarray(table["t_s"], dtype=float), near_uv_px=np.where(points_ok[:, None, None], uv, np.nan),
                    lines=np.where(lines_ok[:, None, None], lines, np.nan), center_line=np.where(found[:, None], center, np.nan),
-                   dF_px=dF, points_ok=points_ok, lines_ok=lines_ok, reason=reason)
+                   dF_px=dF, points_ok=points_ok, lines_ok=lines_ok, reason=reason, far_uv_px=far)
 
     @classmethod
     def from_ideal(cls, features) -> "FeatureSeries":
@@ -190,7 +205,8 @@ class FeatureSeries:
         lines = np.stack([np.stack(features.lines["left"], axis=-1), np.stack(features.lines["right"], axis=-1)], axis=1)
         lines_ok = np.isfinite(lines).all(axis=(1, 2))
         reason = np.array(["" if p else "near corner outside the image" for p in points_ok], dtype=object)
-        return cls(t_s=np.asarray(features.t_s, dtype=float), near_uv_px=np.where(points_ok[:, None, None], uv, np.nan),
+        far = np.where(features.corners_visible[:, 2:, None], features.corners_uv[:, 2:, :], np.nan)
+        return cls(far_uv_px=far, t_s=np.asarray(features.t_s, dtype=float), near_uv_px=np.where(points_ok[:, None, None], uv, np.nan),
                    lines=np.where(lines_ok[:, None, None], lines, np.nan),
                    center_line=np.stack(features.lines["center"], axis=-1), dF_px=np.asarray(features.dF_px, dtype=float),
                    points_ok=points_ok, lines_ok=lines_ok, reason=reason)
@@ -265,6 +281,24 @@ def _heading_weights(near_uv_px: np.ndarray) -> np.ndarray:
     return weights
 
 
+def _dF_with_corner_fallback(features: FeatureSeries, ins_f: InertialSeries, camera: CameraModel) -> np.ndarray:
+    """d_F per frame: as measured, else from the vanishing point of the two edges through the
+    near and far corners (seed 001 appendix: the vanishing point of the runway sides), measured
+    along the inertial horizon. NaN where neither is available."""
+    dF = np.asarray(features.dF_px, dtype=float).copy()
+    corners = np.concatenate([features.near_uv_px, features.far_uv_px], axis=1)   # NL, NR, FL, FR
+    fill = ~np.isfinite(dF) & np.isfinite(corners).all(axis=(1, 2))
+    if fill.any():
+        xy = camera.pixels_to_normalized(corners[fill])
+        left = line_through_points(xy[:, 0], xy[:, 2])
+        right = line_through_points(xy[:, 1], xy[:, 3])
+        vp = intersect_lines(*left, *right)
+        R_cr_level = batch_R_camera_from_runway(ins_f.roll_rad[fill], ins_f.pitch_rad[fill],
+                                                np.zeros(int(fill.sum())), camera.mount_rpy_rad)
+        dF[fill] = dF_from_vanishing_point(vp, *horizon_line(R_cr_level), camera)
+    return dF
+
+
 def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: CameraModel) -> PreparedInputs:
     """Build the per-step observer inputs (see the module docstring for each quantity).
 
@@ -295,10 +329,10 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     # ---- heading: dpsi per frame from d_F, runway heading as a filtered constant
     ins_f = inertial.at(frame_t)
     dpsi_frame = np.full(len(frame_t), np.nan)
-    has_dF = np.isfinite(features.dF_px)
+    dF_px = _dF_with_corner_fallback(features, ins_f, camera)
+    has_dF = np.isfinite(dF_px)
     if has_dF.any():
-        dpsi_frame[has_dF] = dpsi_from_dF(features.dF_px[has_dF], ins_f.roll_rad[has_dF], ins_f.pitch_rad[has_dF],
-                                          camera)
+        dpsi_frame[has_dF] = dpsi_from_dF(dF_px[has_dF], ins_f.roll_rad[has_dF], ins_f.pitch_rad[has_dF], camera)
     psi_rwy_frame = _circular_running_mean(ins_f.heading_rad - dpsi_frame, _heading_weights(features.near_uv_px))
     # value at each step: the estimate from the frames up to that time (hold the last one)
     last_frame = np.searchsorted(frame_t, times + TIME_MATCH_S, side="right") - 1
@@ -324,7 +358,7 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     lines_ok = features.lines_ok & np.isfinite(psi_rwy[frame_steps])
     reason = features.reason.copy()
     for i in np.nonzero((features.points_ok | features.lines_ok) & ~np.isfinite(psi_rwy[frame_steps]))[0]:
-        reason[i] = "no heading deviation yet (d_F not measured)"
+        reason[i] = "no heading deviation yet (neither d_F nor the four corners measured)"
 
     steps = []
     usable = np.isfinite(psi_rwy)

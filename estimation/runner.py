@@ -18,7 +18,7 @@ from visland.estimation.base import Observer
 from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M, deviations_from_lines, deviations_from_points
 from visland.estimation.inputs import PreparedInputs
 
-__all__ = ["ObserverRun", "run_observer"]
+__all__ = ["ObserverRun", "run_observer", "MAX_COAST_S"]
 
 
 @dataclass
@@ -50,12 +50,24 @@ class ObserverRun:
         return len(self.t_s)
 
 
+#: Longest run of frames without a correcting measurement over which an estimate is still
+#: reported: the model is exact dead reckoning only while the state was good, and beyond a few
+#: seconds a coasted estimate is a guess, so it is withheld (NaN) and flagged instead.
+MAX_COAST_S = 2.0
+#: Virtual coordinates |X_v/Z_v| beyond this (a point 10^4 heights away) are not a runway corner.
+_MAX_ABS_YV = 1e4
+
+
 def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
-                 aim_distance_m: float = DEFAULT_AIM_DISTANCE_M) -> ObserverRun:
+                 aim_distance_m: float = DEFAULT_AIM_DISTANCE_M, max_coast_s: float = MAX_COAST_S) -> ObserverRun:
     """Reset ``observer`` at its first measured step with the height guess ``dh0_m`` and run it.
 
-    Raises ``ValueError`` when no frame carries the observer's features.
+    Frames more than ``max_coast_s`` after the last correction get no estimate (NaN) and the
+    reason "no measurement for ... s". Raises ``ValueError`` when no frame carries the
+    observer's features.
     """
+    if not (math.isfinite(max_coast_s) and max_coast_s > 0):
+        raise ValueError(f"max_coast_s must be a positive number of seconds, got {max_coast_s!r}")
     start = prepared.first_step_with(observer.features)
     if start is None:
         raise ValueError(f"{observer.name}: no frame carries usable {observer.features} "
@@ -68,17 +80,28 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     frame_of_step = prepared.frame_of_step
     has_points = hasattr(observer, "predicted_points_yv")
 
+    last_correction = [float(steps[start].t_s)]
+
     def record(j, estimate):
         f = frame_of_step[j]
         if f < 0:
             return
         inp = steps[j]
+        if not estimate.coasting:
+            last_correction[0] = float(inp.t_s)
+        elif inp.t_s - last_correction[0] > max_coast_s:
+            coasting[f] = True
+            reason[f] = (f"no measurement for {inp.t_s - last_correction[0]:.1f} s (> {max_coast_s:g} s): "
+                         f"estimate withheld ({estimate.reason})")
+            return
         out["dh_m"][f] = estimate.dh_m
         out["observability"][f] = estimate.observability
         coasting[f] = estimate.coasting
         reason[f] = estimate.reason if estimate.coasting else ""
         if observer.features == "points":
             yv = observer.predicted_points_yv() if has_points else inp.points_yv
+            if yv is not None and not (np.isfinite(yv).all() and np.abs(yv).max() < _MAX_ABS_YV):
+                yv = inp.points_yv       # a diverged prediction: fall back on the measured points
             if yv is not None:
                 dev = deviations_from_points(yv, estimate.dh_m, aim_distance_m)
                 out["dx_m"][f], out["dy_m"][f], out["width_m"][f] = dev.dx_m, dev.dy_m, dev.width_m
