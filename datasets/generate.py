@@ -421,10 +421,11 @@ def _run_dask(address: str, payload: dict, tasks: list, write) -> None:
         n_workers = max(1, len(client.scheduler_info().get("workers", {})))
         window = 2 * n_workers + 2                       # bounded: PNGs are megabytes each
         queue = list(tasks)
-        running = as_completed()
+        first = []
         for _ in range(min(window, len(queue))):
             index, p, R = queue.pop(0)
-            running.add(client.submit(render_frame_png, payload, index, p, R, pure=False))
+            first.append(client.submit(render_frame_png, payload, index, p, R, pure=False))
+        running = as_completed(first, loop=client.loop)
         for future in running:
             index, data = future.result()
             future.release()

@@ -42,6 +42,9 @@ __all__ = [
     "RenderingUnavailable",
     "gl_projection_matrix",
     "gl_camera_pose",
+    "gl_view_matrix",
+    "make_texture",
+    "mipmap_chain",
     "check_opengl",
     "OffscreenView",
     "EGL_INSTALL_HINT",
@@ -108,6 +111,24 @@ def gl_camera_pose(p_runway_m, R_camera_from_runway) -> np.ndarray:
     T[:3, :3] = R_cr.T @ _G_FROM_C.T          # R_runway_from_G = R_runway_from_camera R_C_from_G
     T[:3, 3] = p
     return T
+
+
+def gl_view_matrix(p_runway_m, R_camera_from_runway) -> np.ndarray:
+    """``T_G_from_runway`` (4, 4): the OpenGL view matrix, computed element by element.
+
+    ``R_G_from_runway = diag(1, -1, -1) R_camera_from_runway`` and ``t = -R_G_from_runway p``.
+    Written without BLAS or LAPACK so that every process gets the same bits (their SIMD paths
+    depend on memory alignment), which keeps resumed datasets byte-identical.
+    """
+    p = [float(v) for v in np.asarray(p_runway_m, dtype=float).reshape(3)]
+    R = np.asarray(R_camera_from_runway, dtype=float)
+    V = np.zeros((4, 4))
+    for i, sign in enumerate((1.0, -1.0, -1.0)):
+        row = [sign * float(R[i, j]) for j in range(3)]
+        V[i, :3] = row
+        V[i, 3] = -((row[0] * p[0] + row[1] * p[1]) + row[2] * p[2])
+    V[3, 3] = 1.0
+    return V
 
 
 def check_opengl(libraries=("libEGL.so.1", ("libOpenGL.so.0", "libGL.so.1"))) -> None:
@@ -215,6 +236,18 @@ def _make_renderer_class():
                         GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
                         self._anisotropic_ids.add(texture._texid)
 
+        def _get_camera_matrices(self, scene):
+            # pyrender inverts the camera pose with LAPACK, whose last bits vary with memory
+            # alignment from process to process; the exact inverse is set by OffscreenView
+            P = scene.main_camera_node.camera.get_projection_matrix(self.viewport_width, self.viewport_height)
+            return self.view_matrix, P
+
+        def _sorted_mesh_nodes(self, scene):
+            # pyrender iterates a set (order varies between processes); where clipped neighbour
+            # triangles meet, the draw order decides an edge pixel: draw in name order so that
+            # every process renders the same bytes
+            return sorted(scene.mesh_nodes, key=lambda node: node.name or "")
+
         def _read_main_framebuffer(self, scene, flags):
             w, h = self._main_fb_dims
             if self.samples > 0:
@@ -227,6 +260,60 @@ def _make_renderer_class():
             return self._colour.copy()
 
     return _ColourRenderer
+
+
+def mipmap_chain(image: np.ndarray) -> list:
+    """Mipmap levels of ``image`` (rows, cols, channels) uint8 down to 1x1, by area averaging.
+
+    Computed here rather than by ``glGenerateMipmap``, whose llvmpipe results differ from one
+    process to the next (and would break byte-identical datasets). Level ``k`` has the OpenGL
+    size ``max(1, floor(size / 2^k))``.
+    """
+    import cv2
+    levels = [np.ascontiguousarray(image)]
+    while levels[-1].shape[0] > 1 or levels[-1].shape[1] > 1:
+        rows, cols = levels[-1].shape[:2]
+        smaller = cv2.resize(levels[-1], (max(1, cols // 2), max(1, rows // 2)), interpolation=cv2.INTER_AREA)
+        levels.append(np.ascontiguousarray(smaller.reshape(max(1, rows // 2), max(1, cols // 2), -1)))
+    return levels
+
+
+def make_texture(image_t_rows: np.ndarray, wrap: int):
+    """A pyrender texture with visland's own mipmaps and byte-packed upload.
+
+    ``image_t_rows`` (rows, cols, 3) uint8 has its row index growing with the texture
+    coordinate t (OpenGL order). pyrender's own upload leaves ``GL_UNPACK_ALIGNMENT`` at 4
+    (rows of odd byte length come out sheared) and calls ``glGenerateMipmap``.
+    """
+    import pyrender
+    from OpenGL import GL
+
+    class MipTexture(pyrender.Texture):
+        def _add_to_context(self):
+            if self._texid is not None:
+                raise ValueError("texture already loaded into the OpenGL context")
+            self._texid = GL.glGenTextures(1)
+            GL.glBindTexture(GL.GL_TEXTURE_2D, self._texid)
+            GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+            levels = mipmap_chain(self.visland_image)
+            for k, level in enumerate(levels):
+                GL.glTexImage2D(GL.GL_TEXTURE_2D, k, GL.GL_RGB8, level.shape[1], level.shape[0], 0, GL.GL_RGB,
+                                GL.GL_UNSIGNED_BYTE, level)
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, len(levels) - 1)
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR)
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, self.sampler.wrapS)
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, self.sampler.wrapT)
+            GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
+
+    image = np.ascontiguousarray(image_t_rows, dtype=np.uint8)
+    if image.ndim != 3 or image.shape[2] != 3:
+        raise ValueError(f"image_t_rows must be (rows, cols, 3) uint8, got shape {image.shape}")
+    # pyrender keeps a top-row-first source; the upload above uses visland_image directly
+    texture = MipTexture(source=np.flipud(image), source_channels="RGB",
+                         sampler=pyrender.Sampler(wrapS=wrap, wrapT=wrap))
+    texture.visland_image = image
+    return texture
 
 
 class _ExactCamera:
@@ -292,6 +379,7 @@ class OffscreenView:
         """
         import pyrender
         pose = gl_camera_pose(p_runway_m, R_camera_from_runway)
+        self._offscreen._renderer.view_matrix = gl_view_matrix(p_runway_m, R_camera_from_runway)
         if self._camera_node is None or self._camera_node not in scene.nodes:
             self._camera_node = pyrender.Node(camera=_ExactCamera(self.camera, znear_m, zfar_m), matrix=pose)
             scene.add_node(self._camera_node)

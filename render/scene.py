@@ -113,11 +113,9 @@ class SceneHandles:
 
 
 def _texture(image_t_rows, wrap: int):
-    """A pyrender Texture from an image whose row index grows with t (flipped back for pyrender)."""
-    import pyrender
-    sampler = pyrender.Sampler(wrapS=wrap, wrapT=wrap)
-    return pyrender.Texture(source=np.ascontiguousarray(np.flipud(image_t_rows)), source_channels="RGB",
-                            sampler=sampler)
+    """A pyrender texture from an image whose row index grows with t (see :func:`glview.make_texture`)."""
+    from .glview import make_texture
+    return make_texture(image_t_rows, wrap)
 
 
 def _material(base_texture=None, detail_texture=None, detail_per_m=0.0, detail_strength=0.0, kind=0,
@@ -178,6 +176,11 @@ def _quads_mesh(cells, uv_of):
     return trimesh.Trimesh(vertices=vertices, faces=faces, visual=visual, process=False)
 
 
+def _add(scene, mesh):
+    """Add ``mesh`` under a name recording the order of addition (the renderer draws in name order)."""
+    return scene.add(mesh, name=f"{len(scene.mesh_nodes):04d}")
+
+
 def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     """Build the airport scene of ``runway`` as a pyrender Scene in the runway frame.
 
@@ -202,7 +205,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     ground_cells = all_cells[owners == -1]
     if flat:
         ground_material = _material(kind=3, colour=(0.0, 0.0, 0.0))
-        scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, None), material=ground_material))
+        _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, None), material=ground_material))
     else:
         extent = 12800.0
         centre = (runway.length_m / 2.0, 0.0)
@@ -214,7 +217,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
             return (x - (centre[0] - extent / 2)) / extent, (y - (centre[1] - extent / 2)) / extent
 
         ground_material = _material(_texture(fields, _REPEAT), _texture(grass, _REPEAT), 1.0 / 16.0, 0.8)
-        scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, ground_uv), material=ground_material))
+        _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, ground_uv), material=ground_material))
 
     # ------------------------------------------------------------ runway tiles
     runway_index = [k for k, r in enumerate(layout.regions) if r.material == "runway"][0]
@@ -243,10 +246,10 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
 
         if flat:
             material = _material(kind=3, colour=(1.0, 1.0, 1.0))
-            scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
+            _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
         else:
             material = _material(_texture(image, _CLAMP), detail_pavement, 1.0 / 8.0, 0.8, kind=4)
-            scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(cells, tile_uv), material=material))
+            _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(cells, tile_uv), material=material))
 
     # ------------------------------------------------------------ strips and apron
     strip_textures = {}
@@ -261,7 +264,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
             apron_detail = textures.pavement_detail(np.random.default_rng([params.seed, 6]), 512, joints_every_px=85)
             colour = np.array(textures.SURFACE_COLOURS["apron_concrete"]) / 255.0
             material = _material(None, _texture(apron_detail, _REPEAT), 1.0 / 30.0, 0.9, colour=tuple(colour))
-            scene.add(pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
+            _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
             continue
         period = 12.0
         width = cell_regions[0].width_m
@@ -281,7 +284,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
             meshes.append(_quads_mesh(cell[None, :], uv))
         mesh = trimesh.util.concatenate(meshes)
         material = _material(_texture(strip_textures[material_name], _REPEAT), detail_pavement, 1.0 / 8.0, 0.6, kind=4)
-        scene.add(pyrender.Mesh.from_trimesh(mesh, material=material))
+        _add(scene, pyrender.Mesh.from_trimesh(mesh, material=material))
 
     # ------------------------------------------------------------ buildings
     max_height = 0.0
@@ -294,7 +297,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
             boxes.append(box)
             max_height = max(max_height, height)
         mesh = trimesh.util.concatenate(boxes)
-        scene.add(pyrender.Mesh.from_trimesh(mesh, material=_material(kind=2), smooth=False))
+        _add(scene, pyrender.Mesh.from_trimesh(mesh, material=_material(kind=2), smooth=False))
 
     # ------------------------------------------------------------ sky dome (follows the camera)
     dome = trimesh.creation.icosphere(subdivisions=3, radius=SKY_RADIUS_M)
@@ -303,5 +306,5 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     else:
         clouds = textures.cloud_texture(np.random.default_rng([params.seed, 8]), 512)
         sky_material = _material(_texture(clouds, _REPEAT), kind=1)
-    sky_node = scene.add(pyrender.Mesh.from_trimesh(dome, material=sky_material))
+    sky_node = _add(scene, pyrender.Mesh.from_trimesh(dome, material=sky_material))
     return SceneHandles(scene=scene, sky_node=sky_node, max_structure_height_m=max_height)

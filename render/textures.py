@@ -62,8 +62,15 @@ def tileable_noise(shape, rng: np.random.Generator, beta: float = 2.0, cutoff: f
     gain[f < max(cutoff, 1e-9)] = 0.0
     gain[0, 0] = 0.0
     field = np.fft.irfft2(np.fft.rfft2(white) * gain, s=(rows, cols))
-    std = field.std()
-    return field / std if std > 0 else field
+    # NumPy's SIMD reductions round differently with the array's memory alignment: round the
+    # statistics and the field so that every process builds bit-identical textures
+    std = _stable(field.std())
+    return np.round(field / std if std > 0 else field, 5)
+
+
+def _stable(value: float) -> float:
+    """``value`` rounded to 7 significant digits (last-bit differences between processes vanish)."""
+    return float(f"{float(value):.7g}")
 
 
 def _to_uint8(image) -> np.ndarray:
@@ -97,14 +104,14 @@ def pavement_detail(rng: np.random.Generator, size: int = 512, joints_every_px: 
         joint = (idx % joints_every_px) == 0
         lum[joint, :] *= 0.72
         lum[:, joint] *= 0.72
-    lum = lum / lum.mean()
+    lum = np.round(lum / _stable(lum.mean()), 5)
     return _to_uint8(np.repeat((lum * 128.0)[..., None], 3, axis=-1))
 
 
 def cloud_texture(rng: np.random.Generator, size: int = 512) -> np.ndarray:
     """Tileable cloud density in [0, 255] (single channel replicated to RGB), (size, size, 3)."""
     density = tileable_noise((size, size), rng, beta=3.0) + 0.35 * tileable_noise((size, size), rng, beta=1.8)
-    density = (density - density.min()) / (density.max() - density.min())
+    density = np.round((density - density.min()) / (density.max() - density.min()), 5)
     return _to_uint8(np.repeat((density * 255.0)[..., None], 3, axis=-1))
 
 
