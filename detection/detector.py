@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import time
 
+import cv2
 import numpy as np
 
 from visland.camera import CameraModel
@@ -103,6 +104,18 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
         return fail(f"frame has no contrast below the horizon (grey levels within {spread:.0f})")
 
     context = _Context(image, camera, horizon, params, roll, pitch, start)
+    try:
+        result, why = _search_frame(context, previous, ground)
+    except (ArithmeticError, np.linalg.LinAlgError, cv2.error) as error:
+        # a degenerate configuration the geometry cannot handle (e.g. lines meeting at
+        # infinity) is a frame without a detection, never an exception for the caller
+        return fail(f"detector failed on this frame ({type(error).__name__}: {error})")
+    return result if result is not None else fail(why)
+
+
+def _search_frame(context: "_Context", previous: DetectionResult | None, ground):
+    """Tracking from ``previous`` when it was found, else (or if that fails) acquisition."""
+    params = context.params
     tracking_reason = None
     if previous is not None and previous.found:
         prediction, roi = _predict(previous, context, ground)
@@ -114,18 +127,18 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
             # of interest; the whole frame only if both fail
             result, why = _measure(context, _hypothesis_of(prediction), "tracking", roi, prediction=prediction)
             if result is not None:
-                return result
+                return result, None
             result, why_roi = _search(context, roi, params.tracking_max_side_px, prediction, "tracking")
             if result is not None:
-                return result
+                return result, None
             tracking_reason = f"{why}; in the region of interest: {why_roi}"
     mode = "acquisition" if tracking_reason is None else "reacquisition"
     result, why = _search(context, ground, params.acquisition_max_side_px, None, mode)
     if result is not None:
-        return result
+        return result, None
     if tracking_reason is not None:
         why = f"{why} (tracking failed first: {tracking_reason})"
-    return fail(why)
+    return None, why
 
 
 class _Context:

@@ -26,7 +26,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame
 
-__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile"]
+__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_mean", "finite_median"]
 
 
 @dataclass(frozen=True)
@@ -235,8 +235,26 @@ def pencil_edges(rect: PencilImage, min_step: float, band_ratio: float = 1.35,
 def row_quantile(values: np.ndarray, q: float) -> np.ndarray:
     """Quantile ``q`` of each row ignoring NaN (NaN where a row has none): vectorised, unlike
     ``np.nanpercentile`` along an axis."""
+    if values.ndim != 2 or values.shape[1] == 0:
+        return np.full(len(values), np.nan)
     ordered = np.sort(values, axis=1)                      # NaN sort last
     count = np.isfinite(ordered).sum(axis=1)
     index = np.clip(np.floor(q * (count - 1) + 0.5).astype(int), 0, values.shape[1] - 1)
     out = ordered[np.arange(len(ordered)), index]
     return np.where(count > 0, out, np.nan)
+
+
+def row_mean(values: np.ndarray) -> np.ndarray:
+    """Mean of each row ignoring NaN (NaN for a row without values, without a warning)."""
+    finite = np.isfinite(values)
+    count = finite.sum(axis=1)
+    total = np.where(finite, values, 0.0).sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
+def finite_median(values) -> float:
+    """Median of the finite values (NaN when there are none, without a warning)."""
+    values = np.asarray(values, float)
+    values = values[np.isfinite(values)]
+    return float(np.median(values)) if values.size else math.nan

@@ -510,7 +510,7 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         t_profiles = (centres - new_line.point) @ new_line.direction
         in_span = np.count_nonzero((t_profiles >= t_in.min() - 0.5) & (t_profiles <= t_in.max() + 0.5))
         sigma_fit = max(rms, 0.05)
-        found_polarity = int(polarity) if polarity else int(np.sign(np.nanmedian(
+        found_polarity = int(polarity) if polarity else int(np.sign(np.median(
             _signed_step(profiles[inliers], offsets))) or 1)
         result = LineFit(
             line=new_line, residual_px=rms, support=n_in / max(in_span, 1),
@@ -544,4 +544,7 @@ def _largest_run(t: np.ndarray, mask: np.ndarray, max_gap: float) -> np.ndarray:
 def _signed_step(profiles: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """Mean grey level on the +normal half minus the -normal half of each profile."""
     half = len(offsets) // 2
-    return np.nanmean(profiles[:, half + 1:], axis=1) - np.nanmean(profiles[:, :half], axis=1)
+    def mean(block):
+        finite = np.isfinite(block)
+        return np.where(finite, block, 0.0).sum(axis=1) / np.maximum(finite.sum(axis=1), 1)
+    return mean(profiles[:, half + 1:]) - mean(profiles[:, :half])

@@ -23,7 +23,7 @@ import cv2
 import numpy as np
 
 from visland.detection.horizon import HorizonFrame
-from visland.detection.pencil import rectify, row_quantile
+from visland.detection.pencil import finite_median, rectify, row_mean, row_quantile
 from visland.detection.refine import PixelLine
 
 __all__ = ["TransverseLine", "find_transverse_line", "surface_extent"]
@@ -83,9 +83,9 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
         (rect.d <= d_support[1] - 0.2 * (d_support[1] - d_support[0]))
     if core.sum() < 2:
         return None
-    darker = np.nanmedian(low[core] - out_level[core]) < 0
+    darker = finite_median(low[core] - out_level[core]) < 0
     contrast = (low - out_level) if darker else (high - out_level)
-    reference = np.nanmedian(contrast[core])
+    reference = finite_median(contrast[core])
     if not np.isfinite(reference) or abs(reference) < 2.0:
         return None
     runway = np.nan_to_num(contrast * np.sign(reference)) > 0.5 * abs(reference)
@@ -159,8 +159,7 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     values = cv2.remap(crop, (u - u0).astype(np.float32), (v - v0).astype(np.float32), cv2.INTER_LINEAR,
                        borderMode=cv2.BORDER_REPLICATE)
     values = np.where(inside, values, np.nan)
-    with np.errstate(invalid="ignore"):
-        profile = np.nanmean(values, axis=1)
+    profile = row_mean(values)
     profile = np.where(rows_ok, profile, np.nan)
     # smooth along depth (about one pixel) and differentiate: g > 0 where grey rises with depth
     valid = np.isfinite(profile)

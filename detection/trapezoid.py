@@ -33,7 +33,8 @@ import numpy as np
 from visland.detection.candidates import CandidateLines
 from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
-from visland.detection.pencil import PencilEdges, PencilImage, pencil_edges, rectify, row_quantile
+from visland.detection.pencil import (PencilEdges, PencilImage, finite_median, pencil_edges, rectify, row_mean,
+                                      row_quantile)
 
 __all__ = ["Prediction", "RunwayHypothesis", "vanishing_point_candidates", "runway_hypotheses"]
 
@@ -136,6 +137,7 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
         hypotheses.extend(_pairs(rect, edges, params, prediction, horizon.camera.fx, bottom_depth_px))
     hypotheses.sort(key=lambda h: -h.score)
     hypotheses = _prefer_enclosing(hypotheses)
+    hypotheses = _prefer_widest_parallel(hypotheses)
     return hypotheses[:max_hypotheses]
 
 
@@ -274,10 +276,9 @@ def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: fl
     outer = max(inner + 1, int(round(0.08 * width / rect.k_step)))
     if centre - outer < 0 or centre + outer >= block.shape[1]:
         return result
-    with np.errstate(invalid="ignore"):
-        mid = np.nanmean(block[:, centre - half:centre + half + 1], axis=1)
-        sides = 0.5 * (np.nanmean(block[:, centre - outer:centre - inner + 1], axis=1)
-                       + np.nanmean(block[:, centre + inner:centre + outer + 1], axis=1))
+    mid = row_mean(block[:, centre - half:centre + half + 1])
+    sides = 0.5 * (row_mean(block[:, centre - outer:centre - inner + 1])
+                   + row_mean(block[:, centre + inner:centre + outer + 1]))
     ridge = mid - sides
     ridge = ridge[np.isfinite(ridge)]
     if ridge.size < 2:
@@ -313,9 +314,9 @@ def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, 
         core = rect.rows_between(d_far, d_near)
     if core.sum() < 1:
         return 0
-    darker = np.nanmedian(low[core] - out_level[core]) < 0
+    darker = finite_median(low[core] - out_level[core]) < 0
     contrast = (low - out_level) if darker else (high - out_level)
-    reference = float(np.nanmedian(contrast[core]))
+    reference = finite_median(contrast[core])
     if not math.isfinite(reference) or reference == 0.0:
         return 0
     strip = np.nan_to_num(contrast * np.sign(reference), nan=-1.0) > 0.5 * abs(reference)
@@ -332,6 +333,38 @@ def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, 
         if limit_ok and len(beyond) >= 2 and ground[beyond].mean() >= 0.5:
             ends += 1
     return ends
+
+
+def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], score_ratio: float = 0.3,
+                            strip_quality: float = 0.5) -> list[RunwayHypothesis]:
+    """Of strips running side by side (one vanishing point, disjoint), put the widest first.
+
+    A runway and its parallel taxiway (half as wide), or a road along it, all look like long
+    paved strips; the runway is the widest. Only strips that are convincingly strips count:
+    a score within ``score_ratio`` of the best, an inside that differs from the outside as much
+    as the edges say, and the same ground on both sides.
+    """
+    if len(hypotheses) < 2:
+        return hypotheses
+    best = hypotheses[0]
+
+    def is_strip(h):
+        e = h.evidence
+        contrast = max(e.get("contrast", 0.0), 1e-6)
+        return (abs(e.get("interior", 0.0)) >= strip_quality * contrast
+                and abs(e.get("outside_gap", math.inf)) <= 0.5 * max(abs(e.get("interior", 0.0)), contrast))
+
+    if not is_strip(best):
+        return hypotheses
+    width = best.k_right - best.k_left
+    rivals = [h for h in hypotheses[1:]
+              if abs(h.s0 - best.s0) < 1e-6 and h.score >= score_ratio * best.score and is_strip(h)
+              and (h.k_left >= best.k_right or h.k_right <= best.k_left)        # side by side, not nested
+              and (h.k_right - h.k_left) > 1.3 * width]
+    if not rivals:
+        return hypotheses
+    widest = max(rivals, key=lambda h: h.k_right - h.k_left)
+    return [widest] + [h for h in hypotheses if h is not widest]
 
 
 def _prefer_enclosing(hypotheses: list[RunwayHypothesis]) -> list[RunwayHypothesis]:
