@@ -101,6 +101,8 @@ def main(argv=None) -> int:
     parser.add_argument("--stop-ft", type=float, default=100.0, help="last frame at this height (default 100 ft)")
     parser.add_argument("--acquire", action="store_true", help="search every frame from scratch (no tracking)")
     parser.add_argument("--out", default="/tmp/detection/detect_accuracy.csv", help="per-frame CSV")
+    parser.add_argument("--cache", metavar="DIR", help="keep rendered frames as PNG in DIR and reuse them "
+                                                        "(re-running the detector without rendering again)")
     args = parser.parse_args(argv)
     if args.every < 1:
         parser.error("--every must be at least 1")
@@ -137,9 +139,19 @@ def main(argv=None) -> int:
             labels = ideal_features(states, scenario.runway, camera)
             R = batch_R_camera_from_runway(states.roll_rad, states.pitch_rad, states.dpsi_rad, camera.mount_rpy_rad)
             previous = None
-            with FrameRenderer(SceneParams(), camera, scenario.runway) as renderer:
+            renderer = None
+            try:
                 for j, index in enumerate(chosen):
-                    grey = cv2.cvtColor(renderer.render(states.p_runway_m[j], R[j]), cv2.COLOR_RGB2GRAY)
+                    cached = os.path.join(args.cache, f"{scenario.name}_{args.size}_{index:05d}.png") \
+                        if args.cache else None
+                    grey = cv2.imread(cached, cv2.IMREAD_GRAYSCALE) if cached and os.path.exists(cached) else None
+                    if grey is None:
+                        if renderer is None:
+                            renderer = FrameRenderer(SceneParams(), camera, scenario.runway)
+                        grey = cv2.cvtColor(renderer.render(states.p_runway_m[j], R[j]), cv2.COLOR_RGB2GRAY)
+                        if cached:
+                            os.makedirs(args.cache, exist_ok=True)
+                            cv2.imwrite(cached, grey)
                     tic = time.perf_counter()
                     result = detect_runway(grey, camera, float(states.roll_rad[j]), float(states.pitch_rad[j]),
                                            params=params, previous=None if args.acquire else previous)
@@ -168,8 +180,11 @@ def main(argv=None) -> int:
                     handle.flush()
                     print(f"{scenario.name} frame {index:5d} {row['distance_m']:7.0f} m found={row['found']} "
                           f"edge={edge:6.2f} near={corner_err[0]:5.2f},{corner_err[1]:5.2f} "
-                          f"dpsi_err={row['dpsi_err_deg']:7.3f} deg {detect_ms:6.0f} ms {result.reason[:60]}",
-                          file=sys.stderr, flush=True)
+                          f"dpsi_err={row['dpsi_err_deg']:7.3f} deg {detect_ms:6.0f} ms {result.mode[:5]} "
+                          f"{result.reason[:60]}", file=sys.stderr, flush=True)
+            finally:
+                if renderer is not None:
+                    renderer.close()
     summary = summarise(rows)
     elapsed = time.perf_counter() - start
     print(f"{len(rows)} frames of {len(args.scenarios)} scenarios (every {args.every}-th frame at {args.fps:g} Hz, "

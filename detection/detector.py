@@ -389,6 +389,15 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         return None, "the two edges do not overlap in depth"
     if not (s0_l + k_l * d_near < s0_r + k_r * d_near):
         return None, "the edges cross below the horizon"
+    if prediction is not None:
+        # the runway's width over the camera height (k_R - k_L = W / h) changes by a few per
+        # cent a second; a parallel taxiway or road is half as wide or less
+        d_mid_check = 0.5 * (d_far + d_near)
+        width_now = ((s0_r + k_r * d_mid_check) - (s0_l + k_l * d_mid_check)) / d_mid_check
+        width_before = prediction.k_right - prediction.k_left
+        if not abs(width_now / width_before - 1.0) <= params.max_width_change:
+            return None, (f"the edges are {width_now / width_before:.2f} times as far apart as predicted: "
+                          "not the runway tracked so far")
     notes = []
     # centre line: midway between the edges in horizon coordinates (harmonic conjugate)
     weights = np.array([1.0 / max(sig_l, 1e-3) ** 2, 1.0 / max(sig_r, 1e-3) ** 2])

@@ -82,6 +82,9 @@ class DetectorParams:
     horizon_sigma_px : float
         One-sigma uncertainty of the horizon from the inertial attitude, pixels: weighs the
         horizon against the three lines when the vanishing point is fused.
+    max_width_change : float
+        In tracking, the runway's apparent width (its width over the camera height) may differ
+        from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
     tracking_sigma_px : float
         How far (one sigma, pixels) the runway may move from its prediction between frames
         before a candidate loses the preference the prediction gives it.
@@ -119,6 +122,7 @@ class DetectorParams:
     threshold_search_fraction: float = 0.35
     horizon_sigma_px: float = 4.0
     tracking_sigma_px: float = 12.0
+    max_width_change: float = 0.25
     min_confidence: float = 0.35
     horizon_margin_px: float = 0.0
     reference_side_px: int = 2048
@@ -164,6 +168,7 @@ class DetectorParams:
         number("threshold_search_fraction", 0.01, 1.0)
         number("horizon_sigma_px", 0.01, 10000.0)
         number("tracking_sigma_px", 0.1, 10000.0)
+        number("max_width_change", 0.01, 10.0)
         number("min_confidence", 0.0, 1.0)
         number("horizon_margin_px", 0.0, 100000.0)
         number("reference_side_px", 16, 100000, integer=True)

@@ -179,6 +179,9 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
         gap_l = np.abs(rect.s0 + edges.k[li][:, None] * depths - s_pred_l).max(axis=1)
         gap_r = np.abs(rect.s0 + edges.k[ri][:, None] * depths - s_pred_r).max(axis=1)
         prior = np.exp(-0.5 * (np.maximum(gap_l, gap_r) / prediction.sigma_px) ** 2)
+        # and about as wide as before (a parallel taxiway is half as wide)
+        width_ratio = (edges.k[ri] - edges.k[li]) / max(prediction.k_right - prediction.k_left, 1e-9)
+        prior = np.where(np.abs(width_ratio - 1.0) <= params.max_width_change, prior, 0.0)
     # inside against both outsides from the band profiles, for every pair at once: a runway's
     # inside differs from the ground beside it, the same on both sides
     overlap = np.clip(np.minimum(near[:, None], edges.bands[None, :, 1])
