@@ -171,7 +171,7 @@ def _make_renderer_class():
             self.samples = int(samples)
             self.anisotropy = float(anisotropy)
             self._anisotropic_ids = set()
-            self._colour = np.empty((height, width, 3), dtype=np.uint8)
+            self._rgba = np.empty((height, width, 4), dtype=np.uint8)
 
         # framebuffer: single-sample colour + depth, plus a multisample one when samples > 0
         def _configure_main_framebuffer(self):
@@ -236,6 +236,33 @@ def _make_renderer_class():
                         GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
                         self._anisotropic_ids.add(texture._texid)
 
+        def _get_primitive_program(self, primitive, flags, program_flags):
+            # pyrender's choice of defines, plus one naming the surface kind (material.name,
+            # e.g. "KIND_SKY"): each kind compiles to its own straight-line shader instead of
+            # llvmpipe evaluating every branch for every pixel
+            from pyrender.constants import BufFlags, TexFlags
+            defines = {}
+            location = 1
+            for flag, name in ((BufFlags.NORMAL, "NORMAL_LOC"), (BufFlags.TANGENT, "TANGENT_LOC"),
+                               (BufFlags.TEXCOORD_0, "TEXCOORD_0_LOC"), (BufFlags.TEXCOORD_1, "TEXCOORD_1_LOC"),
+                               (BufFlags.COLOR_0, "COLOR_0_LOC"), (BufFlags.JOINTS_0, "JOINTS_0_LOC"),
+                               (BufFlags.WEIGHTS_0, "WEIGHTS_0_LOC")):
+                if primitive.buf_flags & flag:
+                    defines[name] = location
+                    location += 1
+            defines["INST_M_LOC"] = location
+            material = primitive.material
+            for flag, name in ((TexFlags.BASE_COLOR, "HAS_BASE_COLOR_TEX"), (TexFlags.EMISSIVE, "HAS_EMISSIVE_TEX")):
+                if material.tex_flags & flag:
+                    defines[name] = 1
+            kind = material.name if material.name and material.name.startswith("KIND_") else "KIND_GROUND"
+            defines[kind] = 1
+            program = self._program_cache.get_program(vertex_shader="flat.vert", fragment_shader="flat.frag",
+                                                      defines=defines)
+            if not program._in_context():
+                program._add_to_context()
+            return program
+
         def _get_camera_matrices(self, scene):
             # pyrender inverts the camera pose with LAPACK, whose last bits vary with memory
             # alignment from process to process; the exact inverse is set by OffscreenView
@@ -256,8 +283,11 @@ def _make_renderer_class():
                 GL.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, GL.GL_COLOR_BUFFER_BIT, GL.GL_NEAREST)
             GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, self._main_fb)
             GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-            GL.glReadPixels(0, 0, w, h, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, self._colour)
-            return self._colour.copy()
+            # RGBA is the framebuffer's own layout (a straight copy in llvmpipe); RGB would be
+            # converted pixel by pixel, three times slower
+            GL.glReadPixels(0, 0, w, h, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE, self._rgba)
+            import cv2
+            return cv2.cvtColor(self._rgba, cv2.COLOR_RGBA2RGB)
 
     return _ColourRenderer
 
@@ -278,12 +308,13 @@ def mipmap_chain(image: np.ndarray) -> list:
     return levels
 
 
-def make_texture(image_t_rows: np.ndarray, wrap: int):
+def make_texture(image_t_rows: np.ndarray, wrap: int, trilinear: bool = True):
     """A pyrender texture with visland's own mipmaps and byte-packed upload.
 
     ``image_t_rows`` (rows, cols, 3) uint8 has its row index growing with the texture
     coordinate t (OpenGL order). pyrender's own upload leaves ``GL_UNPACK_ALIGNMENT`` at 4
-    (rows of odd byte length come out sheared) and calls ``glGenerateMipmap``.
+    (rows of odd byte length come out sheared) and calls ``glGenerateMipmap``. ``trilinear``
+    False samples the nearest mipmap level (half the cost; for detail textures).
     """
     import pyrender
     from OpenGL import GL
@@ -301,7 +332,8 @@ def make_texture(image_t_rows: np.ndarray, wrap: int):
                                 GL.GL_UNSIGNED_BYTE, level)
             GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, len(levels) - 1)
             GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
-            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR)
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER,
+                               GL.GL_LINEAR_MIPMAP_LINEAR if self.visland_trilinear else GL.GL_LINEAR_MIPMAP_NEAREST)
             GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, self.sampler.wrapS)
             GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, self.sampler.wrapT)
             GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
@@ -313,6 +345,7 @@ def make_texture(image_t_rows: np.ndarray, wrap: int):
     texture = MipTexture(source=np.flipud(image), source_channels="RGB",
                          sampler=pyrender.Sampler(wrapS=wrap, wrapT=wrap))
     texture.visland_image = image
+    texture.visland_trilinear = bool(trilinear)
     return texture
 
 

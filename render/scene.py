@@ -35,6 +35,8 @@ GROUND_EXTENT_M = 60000.0
 SKY_RADIUS_M = 120000.0
 RUNWAY_TILE_M = 50.0
 _CLAMP = 33071       # GL_CLAMP_TO_EDGE
+#: Surface kinds of the shaders (see visland.render.shaders).
+_KIND_NAMES = {0: "KIND_GROUND", 1: "KIND_SKY", 2: "KIND_BUILDING", 3: "KIND_FLAT", 4: "KIND_PAVEMENT"}
 _REPEAT = 10497      # GL_REPEAT
 
 
@@ -112,19 +114,19 @@ class SceneHandles:
     max_structure_height_m: float
 
 
-def _texture(image_t_rows, wrap: int):
+def _texture(image_t_rows, wrap: int, trilinear: bool = True):
     """A pyrender texture from an image whose row index grows with t (see :func:`glview.make_texture`)."""
     from .glview import make_texture
-    return make_texture(image_t_rows, wrap)
+    return make_texture(image_t_rows, wrap, trilinear)
 
 
 def _material(base_texture=None, detail_texture=None, detail_per_m=0.0, detail_strength=0.0, kind=0,
               colour=(1.0, 1.0, 1.0)):
     import pyrender
     return pyrender.MetallicRoughnessMaterial(
-        baseColorFactor=(*colour, 1.0), baseColorTexture=base_texture, emissiveTexture=detail_texture,
-        emissiveFactor=(detail_per_m, detail_strength, float(kind)), metallicFactor=0.0, roughnessFactor=1.0,
-        doubleSided=True)
+        name=_KIND_NAMES[kind], baseColorFactor=(*colour, 1.0), baseColorTexture=base_texture,
+        emissiveTexture=detail_texture, emissiveFactor=(detail_per_m, detail_strength, float(kind)),
+        metallicFactor=0.0, roughnessFactor=1.0, doubleSided=True)
 
 
 def _grid_edges(layout: AirportLayout) -> tuple[np.ndarray, np.ndarray]:
@@ -216,7 +218,8 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
         def ground_uv(x, y):
             return (x - (centre[0] - extent / 2)) / extent, (y - (centre[1] - extent / 2)) / extent
 
-        ground_material = _material(_texture(fields, _REPEAT), _texture(grass, _REPEAT), 1.0 / 16.0, 0.8)
+        ground_material = _material(_texture(fields, _REPEAT), _texture(grass, _REPEAT, trilinear=False), 1.0 / 16.0,
+                                    0.8)
         _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, ground_uv), material=ground_material))
 
     # ------------------------------------------------------------ runway tiles
@@ -227,7 +230,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     if not flat:
         joints = 0
         detail_pavement = _texture(textures.pavement_detail(np.random.default_rng([params.seed, 4]), 512, joints),
-                                   _REPEAT)
+                                   _REPEAT, trilinear=False)
     edges = layout.runway_tile_edges_m
     centres_x = 0.5 * (runway_cells[:, 0] + runway_cells[:, 1])
     tile_of_cell = np.clip(np.searchsorted(edges, centres_x) - 1, 0, len(edges) - 2)
@@ -263,7 +266,8 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
         if material_name == "apron":
             apron_detail = textures.pavement_detail(np.random.default_rng([params.seed, 6]), 512, joints_every_px=85)
             colour = np.array(textures.SURFACE_COLOURS["apron_concrete"]) / 255.0
-            material = _material(None, _texture(apron_detail, _REPEAT), 1.0 / 30.0, 0.9, colour=tuple(colour))
+            material = _material(None, _texture(apron_detail, _REPEAT, trilinear=False), 1.0 / 30.0, 0.9,
+                                 colour=tuple(colour))
             _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
             continue
         period = 12.0
@@ -301,6 +305,11 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
 
     # ------------------------------------------------------------ sky dome (follows the camera)
     dome = trimesh.creation.icosphere(subdivisions=3, radius=SKY_RADIUS_M)
+    # the upper half and a band down to 6 deg below the horizon (beyond the ground's edge):
+    # the sky shader never runs where the ground hides it
+    keep = (dome.vertices[dome.faces][:, :, 2] < SKY_RADIUS_M * math.sin(math.radians(6.0))).any(axis=1)
+    dome.update_faces(keep)
+    dome.remove_unreferenced_vertices()
     if flat:
         sky_material = _material(kind=3, colour=(0.0, 0.0, 0.0))
     else:

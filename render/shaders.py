@@ -2,17 +2,18 @@
 
 pyrender draws every primitive with ``flat.vert`` / ``flat.frag`` from the folder given to its
 program cache when the ``FLAT`` flag is set; :func:`write_shaders` writes ours there. pyrender
-sets the uniforms ``M, V, P, cam_pos`` and the material's fields; visland's materials use the
-material's ``emissive_factor`` as ``(detail_per_m, detail_strength, kind)``:
+sets the uniforms ``M, V, P, cam_pos`` and the material's fields. Each material names its
+surface kind (``material.name``, e.g. ``KIND_SKY``), which the renderer turns into a define, so
+each kind compiles to its own shader; ``emissive_factor`` holds ``(detail_per_m, detail_strength, kind)``:
 
-- ``kind`` 0 (ground and pavements): albedo = base texture at the mesh UVs x detail texture
+- ``KIND_GROUND``, 0 (fields and grass): albedo = base texture at the mesh UVs x detail texture
   (the emissive slot) sampled at world ``(x, y) * detail_per_m``; lit by sky light and the sun
   on the flat ground; then distance haze;
-- ``kind`` 1 (sky dome): sky colour from the view direction (gradient, sun glow), clouds from
+- ``KIND_SKY``, 1 (sky dome): sky colour from the view direction (gradient, sun glow), clouds from
   the base texture projected on a cloud layer, no haze;
-- ``kind`` 2 (buildings): base colour lit by the sun through the face normal, then haze;
-- ``kind`` 3 (flat test scenes): base colour exactly, no light, no haze;
-- ``kind`` 4 (pavements: runway, taxiways, roads): as 0, with the base texture filtered
+- ``KIND_BUILDING``, 2 (buildings): base colour lit by the sun through the face normal, then haze;
+- ``KIND_FLAT``, 3 (flat test scenes): base colour exactly, no light, no haze;
+- ``KIND_PAVEMENT``, 4 (runway, taxiways, roads): as 0, with the base texture filtered
   anisotropically in the shader (up to ``SceneParams.anisotropy`` taps along the footprint).
 
 Haze follows Koschmieder: transmittance ``exp(-3.0 d / V)`` over distance ``d`` for a
@@ -110,6 +111,7 @@ const float CLOUD_COVER = @CLOUD_COVER@;
 const float CLOUD_HEIGHT = 1800.0;
 const float CLOUD_SCALE = 9000.0;
 const float MAX_TAPS = @MAX_TAPS@;
+const float GROUND_LIGHT = AMBIENT + SUN_GAIN * max(-SUN_DIR.z, 0.0);   // flat ground, normal up (-z)
 
 vec3 sky_colour(vec3 dir)
 {
@@ -157,35 +159,36 @@ vec3 haze(vec3 colour)
 void main()
 {
     vec4 base = material.base_color_factor * colour_multiplier;
-    int kind = int(material.emissive_factor.z + 0.5);
-    if (kind == 1) {
-        vec3 dir = normalize(frag_position - cam_pos);
-        vec3 colour = sky_colour(dir);
+#ifdef KIND_SKY
+    vec3 dir = normalize(frag_position - cam_pos);
+    vec3 colour = sky_colour(dir);
 #ifdef HAS_BASE_COLOR_TEX
-        float elevation = -dir.z;
-        if (CLOUD_COVER > 0.0 && elevation > 0.0) {
-            vec2 uv = (cam_pos.xy + dir.xy * (CLOUD_HEIGHT / max(elevation, 0.03))) / CLOUD_SCALE;
-            float density = texture(material.base_color_texture, uv).r;
-            float a = smoothstep(1.0 - CLOUD_COVER - 0.05, 1.0 - CLOUD_COVER + 0.30, density);
-            a *= smoothstep(0.0, 0.12, elevation);
-            vec3 cloud = mix(vec3(0.97, 0.97, 0.98), vec3(0.74, 0.76, 0.80), smoothstep(0.5, 1.0, density));
-            colour = mix(colour, cloud, a * 0.92);
-        }
-#endif
-        frag_color = vec4(clamp(colour, 0.0, 1.0), 1.0);
-        return;
-    }
-#ifdef HAS_BASE_COLOR_TEX
-    if (kind == 4) {
-        base *= sample_anisotropic(material.base_color_texture, uv_0);
-    } else {
-        base *= texture(material.base_color_texture, uv_0);
+    float elevation = -dir.z;
+    if (CLOUD_COVER > 0.0 && elevation > 0.0) {
+        vec2 uv = (cam_pos.xy + dir.xy * (CLOUD_HEIGHT / max(elevation, 0.03))) / CLOUD_SCALE;
+        float density = texture(material.base_color_texture, uv).r;
+        float a = smoothstep(1.0 - CLOUD_COVER - 0.05, 1.0 - CLOUD_COVER + 0.30, density);
+        a *= smoothstep(0.0, 0.12, elevation);
+        vec3 cloud = mix(vec3(0.97, 0.97, 0.98), vec3(0.74, 0.76, 0.80), smoothstep(0.5, 1.0, density));
+        colour = mix(colour, cloud, a * 0.92);
     }
 #endif
-    if (kind == 3) {
-        frag_color = vec4(clamp(base.rgb, 0.0, 1.0), 1.0);
-        return;
-    }
+    frag_color = vec4(clamp(colour, 0.0, 1.0), 1.0);
+#endif
+#ifdef KIND_FLAT
+#ifdef HAS_BASE_COLOR_TEX
+    base *= texture(material.base_color_texture, uv_0);
+#endif
+    frag_color = vec4(clamp(base.rgb, 0.0, 1.0), 1.0);
+#endif
+#ifdef KIND_BUILDING
+    float light = AMBIENT + SUN_GAIN * max(dot(normalize(frag_normal), SUN_DIR), 0.0);
+    frag_color = vec4(clamp(haze(base.rgb * light * SUN_COLOUR), 0.0, 1.0), 1.0);
+#endif
+#ifdef KIND_GROUND
+#ifdef HAS_BASE_COLOR_TEX
+    base *= texture(material.base_color_texture, uv_0);
+#endif
 #ifdef HAS_EMISSIVE_TEX
     // the detail texture at two incommensurate scales: its tiling does not show
     vec2 p_detail = frag_position.xy * material.emissive_factor.x;
@@ -193,14 +196,18 @@ void main()
     vec3 detail_large = texture(material.emissive_texture, p_detail * 0.1731 + vec2(0.37, 0.61)).rgb;
     base.rgb *= mix(vec3(1.0), 4.0 * detail * detail_large, material.emissive_factor.y);
 #endif
-    float light;
-    if (kind == 2) {
-        light = AMBIENT + SUN_GAIN * max(dot(normalize(frag_normal), SUN_DIR), 0.0);
-    } else {
-        light = AMBIENT + SUN_GAIN * max(-SUN_DIR.z, 0.0);
-    }
-    vec3 colour = base.rgb * light * SUN_COLOUR;
-    frag_color = vec4(clamp(haze(colour), 0.0, 1.0), 1.0);
+    frag_color = vec4(clamp(haze(base.rgb * GROUND_LIGHT * SUN_COLOUR), 0.0, 1.0), 1.0);
+#endif
+#ifdef KIND_PAVEMENT
+#ifdef HAS_BASE_COLOR_TEX
+    base *= sample_anisotropic(material.base_color_texture, uv_0);
+#endif
+#ifdef HAS_EMISSIVE_TEX
+    vec3 detail = texture(material.emissive_texture, frag_position.xy * material.emissive_factor.x).rgb;
+    base.rgb *= mix(vec3(1.0), 2.0 * detail, material.emissive_factor.y);
+#endif
+    frag_color = vec4(clamp(haze(base.rgb * GROUND_LIGHT * SUN_COLOUR), 0.0, 1.0), 1.0);
+#endif
 }
 """
 

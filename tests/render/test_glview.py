@@ -16,7 +16,7 @@ def _marker_scene(corners_runway_m):
     import pyrender
     import trimesh
     mesh = trimesh.Trimesh(vertices=np.asarray(corners_runway_m, float), faces=[[0, 1, 2], [0, 2, 3]], process=False)
-    material = pyrender.MetallicRoughnessMaterial(baseColorFactor=(1.0, 1.0, 1.0, 1.0),
+    material = pyrender.MetallicRoughnessMaterial(name="KIND_FLAT", baseColorFactor=(1.0, 1.0, 1.0, 1.0),
                                                   emissiveFactor=(0.0, 0.0, 3.0), doubleSided=True)
     scene = pyrender.Scene(bg_color=(0.0, 0.0, 0.0, 1.0))
     scene.add(pyrender.Mesh.from_trimesh(mesh, material=material))
