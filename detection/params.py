@@ -105,7 +105,7 @@ class DetectorParams:
     hough_votes: int = 18
     hough_min_length_px: float = 14.0
     hough_max_gap_px: float = 3.0
-    hough_angle_step_deg: float = 0.25
+    hough_angle_step_deg: float = 1.0
     max_candidates: int = 150
     max_edge_slope: float = 4.0
     vp_tolerance_px: float = 8.0
