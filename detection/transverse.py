@@ -172,7 +172,14 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     g[-5:] = 0.0
     g = np.where(valid, g, 0.0)
     magnitude = np.abs(g)
-    noise = 1.4826 * np.median(np.abs(magnitude - np.median(magnitude))) + 1e-3
+    # the profile's noise: the smaller of the spreads over the whole window and over its part
+    # outside the runway (markings inside, or field boundaries beyond the runway's end, are
+    # structure, not noise)
+    def spread(pool):
+        return 1.4826 * float(np.median(np.abs(pool - np.median(pool)))) if pool.size >= 8 else math.inf
+
+    outside = valid & ((depths > d_expected + 2.0) if outward > 0 else (depths < d_expected - 2.0))
+    noise = min(spread(magnitude[valid]), spread(magnitude[outside])) + 1e-3
     peaks = np.nonzero((magnitude[1:-1] >= magnitude[:-2]) & (magnitude[1:-1] > magnitude[2:])
                        & (magnitude[1:-1] >= min_significance * noise)
                        & (magnitude[1:-1] >= min_step * 0.25))[0] + 1
