@@ -274,11 +274,8 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
 
     A flank is located at the centroid of its derivative lobe (within 1 px of its peak). A
     rendered frame is area-sampled: a step becomes a one-pixel ramp whose derivative lobe is
-    centred on the step. A stripe narrower than a pixel becomes a one-pixel bump whatever its
-    width, its outer flank centred half a pixel minus half the stripe outside the stripe's
-    centre: when the two flanks are a pixel apart (unresolved stripe), the boundary is put a
-    quarter pixel inside the outer flank, which is within a quarter pixel of it for any width
-    below a pixel.
+    centred on the step; a stripe narrower than two pixels has its outer flank's lobe pushed
+    outwards, by an amount read from the separation of its two flanks (see the code).
 
     Profiles should be sampled finely (0.5 px); the derivative is the central difference.
 
@@ -310,17 +307,26 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
     chosen = np.where(has_outer, p2, p1)
     lobe_sign = np.where(has_outer, -sign1, sign1)
     strength = np.where(has_outer, opposite[rows, p2], best)
-    # centroid of the chosen lobe within one pixel of its peak
+    # centroid of a lobe within one pixel of its peak
     half = max(1, int(round(1.0 / step)))
-    idx = np.clip(chosen[:, None] + np.arange(-half, half + 1)[None, :], 0, m - 1)
-    w = np.maximum(lobe_sign[:, None] * g0[rows[:, None], idx], 0.0)
-    total = w.sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        position = (w * offsets[idx]).sum(axis=1) / total
-    # unresolved stripe (flanks about a pixel apart): the boundary lies inside the outer flank
-    separation = np.abs(p2 - p1) * step
-    unresolved = has_outer & (separation <= 1.25)
-    position = position - np.where(unresolved, 0.25 * out_dir, 0.0)
+
+    def centroid(peak, sign):
+        idx = np.clip(peak[:, None] + np.arange(-half, half + 1)[None, :], 0, m - 1)
+        w = np.maximum(sign[:, None] * g0[rows[:, None], idx], 0.0)
+        total = w.sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return (w * offsets[idx]).sum(axis=1) / total, total
+
+    position, total = centroid(chosen, lobe_sign)
+    inner, _ = centroid(p1, sign1)
+    # a stripe narrower than about two pixels is not resolved: area sampling spreads each of its
+    # flanks over a pixel, which puts the outer flank's centroid up to half a pixel outside the
+    # boundary (0.53 px for a 0.5 px stripe, 0.32 for 1 px, 0.03 for 2 px: calibrated on
+    # area-sampled profiles, where the flanks are 1.4, 1.56 and 2.06 px apart); the flanks'
+    # separation measures it
+    separation = np.abs(position - inner)
+    shift = 0.55 * np.exp(-(np.maximum(separation - 1.4, 0.0) / 0.3) ** 1.5)
+    position = position - np.where(has_outer, shift * out_dir, 0.0)
     valid = np.isfinite(best) & (best > 0) & (total > 0) & (chosen >= half) & (chosen < m - half)
     return np.where(valid, position, np.nan), np.where(valid, strength, 0.0)
 
@@ -397,9 +403,11 @@ def fit_line(points: np.ndarray, weights: np.ndarray, min_sigma_px: float = 0.05
         line = PixelLine(centroid, np.array([math.cos(angle), math.sin(angle)]))
         r = rel @ line.normal
         active = r[w > 0]
-        mad = float(np.median(np.abs(active - np.median(active)))) if active.size else 0.0
+        centre = float(np.median(active)) if active.size else 0.0
+        mad = float(np.median(np.abs(active - centre))) if active.size else 0.0
         sigma = max(1.4826 * mad, min_sigma_px)
-        u = r / (4.685 * sigma)
+        # residuals about their median: a first fit pulled by outliers still keeps its inliers
+        u = (r - centre) / (4.685 * sigma)
         w = w0 * np.where(np.abs(u) < 1.0, (1 - u ** 2) ** 2, 0.0)
     inliers_usable = w > 0
     mask = np.zeros(len(usable), dtype=bool)

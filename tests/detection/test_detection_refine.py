@@ -1,0 +1,100 @@
+"""Sub-pixel refinement against known truth: area-sampled synthetic edges and stripes at known
+sub-pixel positions (each pixel the average of 16 x 16 samples of the ideal picture)."""
+import math
+
+import numpy as np
+import pytest
+
+from visland.detection.refine import PixelLine, fit_line, refine_line
+
+
+def area_sampled(size, grey_of, supersample=16, noise=0.0, seed=0):
+    """Image whose pixel (u, v) (centred at integer u, v) averages grey_of(u', v') over its area."""
+    offsets = (np.arange(supersample) + 0.5) / supersample - 0.5
+    u = np.arange(size)[None, :, None, None] + offsets[None, None, None, :]
+    v = np.arange(size)[:, None, None, None] + offsets[None, None, :, None]
+    image = grey_of(np.broadcast_to(u, (size, size, supersample, supersample)),
+                    np.broadcast_to(v, (size, size, supersample, supersample))).mean(axis=(2, 3))
+    if noise:
+        image = image + np.random.default_rng(seed).normal(0.0, noise, image.shape)
+    return np.clip(image, 0, 255).astype(np.float32)
+
+
+def signed_distance(u, v, point, angle):
+    """Distance along the normal (-sin, cos) of the line through ``point`` at ``angle``."""
+    return -(u - point[0]) * math.sin(angle) + (v - point[1]) * math.cos(angle)
+
+
+TRUE_POINT = np.array([40.3, 31.7])
+TRUE_ANGLE = math.radians(63.0)          # a slanted line: every sub-pixel phase occurs along it
+
+
+def true_line():
+    return PixelLine(TRUE_POINT, np.array([math.cos(TRUE_ANGLE), math.sin(TRUE_ANGLE)]))
+
+
+def line_error_px(fit_line_, span=(-25, 25)):
+    """Largest distance from the true line's points over ``span`` to the fitted line."""
+    t = np.linspace(*span, 50)
+    points = TRUE_POINT + t[:, None] * true_line().direction
+    return float(np.abs(fit_line_.distance(points)).max())
+
+
+def start_line(offset_px=2.0, turn_deg=1.5):
+    """A wrong initial guess: shifted and turned."""
+    angle = TRUE_ANGLE + math.radians(turn_deg)
+    direction = np.array([math.cos(angle), math.sin(angle)])
+    normal = np.array([-direction[1], direction[0]])
+    return PixelLine(TRUE_POINT + offset_px * normal, direction)
+
+
+def test_plain_step_is_located_to_a_few_hundredths_of_a_pixel():
+    image = area_sampled(80, lambda u, v: np.where(signed_distance(u, v, TRUE_POINT, TRUE_ANGLE) > 0, 150.0, 80.0),
+                         noise=1.5, seed=1)
+    fit = refine_line(image, start_line(), (-25, 25), "edge", halfwidth_px=6, outward=1, outward_reach_px=1.5)
+    assert fit is not None and fit.support > 0.9
+    assert line_error_px(fit.line) < 0.05
+    assert fit.residual_px < 0.2
+
+
+@pytest.mark.parametrize("stripe_px, tolerance", [(4.0, 0.1), (2.0, 0.15), (0.5, 0.3)])
+def test_boundary_past_a_painted_side_stripe(stripe_px, tolerance):
+    """Grass (outside, +normal side) | white stripe | asphalt: the boundary is grass/stripe."""
+    def grey(u, v):
+        d = signed_distance(u, v, TRUE_POINT, TRUE_ANGLE)         # > 0 outside the runway
+        return np.where(d > 0, 115.0, np.where(d > -stripe_px, 235.0, 84.0))
+
+    image = area_sampled(80, grey, noise=1.5, seed=2)
+    fit = refine_line(image, start_line(offset_px=-1.0), (-25, 25), "edge", halfwidth_px=6, outward=1,
+                      outward_reach_px=max(1.5, 1.5 * stripe_px))
+    assert fit is not None
+    assert line_error_px(fit.line) < tolerance
+
+
+@pytest.mark.parametrize("width_px", [0.7, 3.0, 8.0])
+def test_stripe_centre(width_px):
+    def grey(u, v):
+        return np.where(np.abs(signed_distance(u, v, TRUE_POINT, TRUE_ANGLE)) < width_px / 2, 220.0, 90.0)
+
+    image = area_sampled(80, grey, noise=1.0, seed=3)
+    fit = refine_line(image, start_line(offset_px=1.5), (-25, 25), "stripe", polarity=1, halfwidth_px=6 + width_px,
+                      stripe_width_px=lambda t: np.full(np.shape(t), width_px + 3.0))
+    assert fit is not None
+    assert line_error_px(fit.line) < 0.1
+
+
+def test_line_fit_ignores_outliers():
+    rng = np.random.default_rng(4)
+    t = np.linspace(-30, 30, 120)
+    points = TRUE_POINT + t[:, None] * true_line().direction + rng.normal(0, 0.1, (120, 1)) * true_line().normal
+    points[::7] += 6.0 * true_line().normal                # markings beside the edge
+    line, inliers, sigma = fit_line(points, np.ones(len(points)))
+    assert line_error_px(line) < 0.05
+    assert not inliers[::7].any() and inliers.sum() > 90
+    assert sigma == pytest.approx(0.1, rel=0.3)
+
+
+def test_no_edge_gives_none():
+    flat = np.full((80, 80), 100.0, np.float32) + np.random.default_rng(5).normal(0, 1.0, (80, 80)).astype(np.float32)
+    assert refine_line(flat, start_line(), (-25, 25), "edge", halfwidth_px=6, min_contrast=6.0, outward=1,
+                       outward_reach_px=1.5) is None
