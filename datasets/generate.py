@@ -173,14 +173,11 @@ def render_frame_png(payload: dict, index: int, p_runway_m, R_camera_from_runway
     return index, encoded.tobytes()
 
 
-def _pool_init(payload):
-    _WORKER["payload"] = payload
-    _renderer_for(payload)
-
-
 def _pool_task(task):
-    index, p, R = task
-    return render_frame_png(_WORKER["payload"], index, p, R)
+    # no Pool initializer: an error there (no EGL, say) makes Pool restart workers forever;
+    # raised here, it reaches the parent through imap
+    payload, index, p, R = task
+    return render_frame_png(payload, index, p, R)
 
 
 # --------------------------------------------------------------------------- folder state
@@ -352,6 +349,9 @@ def generate_dataset(job: GenerateJob, out_dir, workers: int = 1, scheduler: str
     R_cr = batch_R_camera_from_runway(s.roll_rad, s.pitch_rad, s.dpsi_rad, camera.mount_rpy_rad)
     tasks = [(i, s.p_runway_m[i], R_cr[i]) for i in pending]
     payload = _payload(job, result)
+    if tasks and not scheduler:
+        from visland.render.glview import check_opengl
+        check_opengl()          # one clear sentence here rather than in every worker
     bar = _Progress(n, reused, enabled=progress)
 
     def write(index: int, data: bytes) -> None:
@@ -399,9 +399,9 @@ def generate_dataset(job: GenerateJob, out_dir, workers: int = 1, scheduler: str
 def _run_pool(workers: int, payload: dict, tasks: list, write) -> None:
     import multiprocessing
     context = multiprocessing.get_context("spawn")   # one fresh GL context per process
-    with context.Pool(min(workers, len(tasks)), initializer=_pool_init, initargs=(payload,)) as pool:
+    with context.Pool(min(workers, len(tasks))) as pool:
         try:
-            for index, data in pool.imap_unordered(_pool_task, tasks, chunksize=1):
+            for index, data in pool.imap_unordered(_pool_task, [(payload, *task) for task in tasks], chunksize=1):
                 write(index, data)
         except BaseException:
             pool.terminate()
