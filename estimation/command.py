@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+from visland.contracts import ESTIMATE_EXTRA_COLUMNS
 from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M
 from visland.estimation.registry import make_observer, observer_class, observer_features
 
 __all__ = ["EstimateOptions", "estimate_folder", "load_observer_params", "ESTIMATE_EXTRA_COLUMNS"]
 
-ESTIMATE_EXTRA_COLUMNS = ("coasting",)
 
 
 @dataclass(frozen=True)

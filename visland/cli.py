@@ -36,6 +36,20 @@ def _cmd_scenarios(args) -> int:
     return 0
 
 
+def _angles(text: str):
+    """One number, or three comma-separated numbers."""
+    parts = [p for p in text.split(",") if p.strip()]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number or three comma-separated numbers, got {text!r}") from None
+    if len(values) == 1:
+        return values[0]
+    if len(values) == 3:
+        return tuple(values)
+    raise argparse.ArgumentTypeError(f"expected one or three numbers, got {len(values)}")
+
+
 def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
     """Arguments shared by ``simulate`` and the commands that simulate before rendering."""
     parser.add_argument("--scenario", required=True, metavar="NAME|FILE",
@@ -43,8 +57,9 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder (must not exist unless --force)")
     parser.add_argument("--fps", type=float, default=25.0, help="camera frame rate in Hz (default 25)")
     parser.add_argument("--seed", type=int, default=0, help="seed of every random generator (default 0)")
-    parser.add_argument("--calibration-error", type=float, default=0.0, metavar="DEG",
-                        help="camera mounting error added to roll, pitch and yaw (thesis 5.2.2.2: 0.3, 0.5, 1)")
+    parser.add_argument("--calibration-error", type=_angles, default=0.0, metavar="DEG|R,P,Y",
+                        help="camera mounting error in degrees: one value added to roll, pitch and yaw (thesis "
+                             "5.2.2.2: 0.3, 0.5, 1), or three 'roll,pitch,yaw'")
     parser.add_argument("--velocity-bias", type=float, default=0.0, metavar="FRACTION",
                         help="constant relative IMU velocity bias, e.g. 0.05 for 5 %% (thesis 5.2.2.3)")
     parser.add_argument("--imu-noise", type=float, default=0.0, metavar="SCALE",

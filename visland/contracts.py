@@ -12,7 +12,8 @@ Schemas (columns in this order; "more columns may follow" where SPEC says so):
 - ``labels.csv``: :data:`LABEL_COLUMNS` then :data:`LABEL_EXTRA_COLUMNS`, one row per frame.
 - ``measurements.csv``: :data:`MEASUREMENT_COLUMNS` (labels schema + source, found, reason,
   confidence); empty cells where a feature was not measured.
-- ``estimates.csv``: :data:`ESTIMATE_COLUMNS`, one row per observer per frame.
+- ``estimates.csv``: :data:`ESTIMATE_COLUMNS` then :data:`ESTIMATE_EXTRA_COLUMNS`, one row per
+  observer per frame.
 - ``frames.csv``: ``frame,t_s``.
 """
 from __future__ import annotations
@@ -33,7 +34,7 @@ from visland.sensors import TELEMETRY_COLUMNS
 
 __all__ = [
     "TELEMETRY_COLUMNS", "TRUTH_COLUMNS", "TRUTH_EXTRA_COLUMNS", "LABEL_COLUMNS", "LABEL_EXTRA_COLUMNS",
-    "MEASUREMENT_COLUMNS", "ESTIMATE_COLUMNS", "FRAMES_COLUMNS", "Table", "read_csv", "write_csv",
+    "MEASUREMENT_COLUMNS", "ESTIMATE_COLUMNS", "ESTIMATE_EXTRA_COLUMNS", "FRAMES_COLUMNS", "Table", "read_csv", "write_csv",
     "read_telemetry", "read_truth", "read_labels", "read_measurements", "read_frames_csv", "read_estimates",
     "atomic_write_text", "atomic_write_bytes", "staged_output_dir", "check_time_column",
 ]
@@ -53,6 +54,9 @@ LABEL_EXTRA_COLUMNS = ("yv1_near_left", "yv2_near_left", "yv1_near_right", "yv2_
                        "obs_points", "obs_lines")
 MEASUREMENT_COLUMNS = LABEL_COLUMNS + ("source", "found", "reason", "confidence")
 ESTIMATE_COLUMNS = ("observer", "t_s", "dx_m", "dy_m", "dh_m", "width_m", "dpsi_deg", "observability")
+#: 1 where no measurement corrected the frame (the observer ran on its model, or its estimate
+#: was withheld after a long gap: then the estimate cells are empty).
+ESTIMATE_EXTRA_COLUMNS = ("coasting",)
 FRAMES_COLUMNS = ("frame", "t_s")
 
 #: Label/measurement columns that may be empty (not visible, not measured).

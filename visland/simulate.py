@@ -36,7 +36,7 @@ class SimulationOptions:
     fps: float = 25.0
     camera: CameraModel = field(default_factory=CameraModel.default)
     pixel_noise_px: float = 0.0
-    calibration_error_deg: float = 0.0
+    calibration_error_deg: float | tuple = 0.0   # one angle for roll, pitch and yaw, or (roll, pitch, yaw)
     imu: ImuParams = field(default_factory=ImuParams)
     seed: int = 0
 
@@ -45,14 +45,22 @@ class SimulationOptions:
             raise ValueError(f"fps must lie in [1, 50] frames per second (the dynamics run at 50 Hz), got {self.fps!r}")
         if not (math.isfinite(self.pixel_noise_px) and 0.0 <= self.pixel_noise_px <= 50.0):
             raise ValueError(f"pixel noise must lie in [0, 50] px, got {self.pixel_noise_px!r}")
-        if not (math.isfinite(self.calibration_error_deg) and abs(self.calibration_error_deg) <= 10.0):
-            raise ValueError(f"calibration error must lie in [-10, 10] deg, got {self.calibration_error_deg!r}")
+        error = self.calibration_error_deg
+        values = list(error) if isinstance(error, (tuple, list)) else [error]
+        if (len(values) not in (1, 3) or not all(isinstance(v, (int, float)) and math.isfinite(v) and abs(v) <= 10.0
+                                                 for v in values)):
+            raise ValueError("calibration error must be one angle or three (roll, pitch, yaw), each in [-10, 10] deg, "
+                             f"got {error!r}")
+        if isinstance(error, list):
+            object.__setattr__(self, "calibration_error_deg", tuple(error))
         if not isinstance(self.seed, int) or self.seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
 
     def to_json_dict(self) -> dict:
         return {"fps": self.fps, "camera": self.camera.to_json_dict(), "pixel_noise_px": self.pixel_noise_px,
-                "calibration_error_deg": self.calibration_error_deg, "imu": asdict(self.imu), "seed": self.seed}
+                "calibration_error_deg": (list(self.calibration_error_deg) if isinstance(self.calibration_error_deg, tuple)
+                                          else self.calibration_error_deg),
+                "imu": asdict(self.imu), "seed": self.seed}
 
 
 @dataclass
@@ -103,7 +111,7 @@ def run_simulation(scenario: Scenario, options: SimulationOptions | None = None)
     times = frame_times(trajectory.duration_s, options.fps)
     frames = trajectory.at(times)
     camera_true = (camera_with_calibration_error(options.camera, options.calibration_error_deg)
-                   if options.calibration_error_deg else options.camera)
+                   if np.any(options.calibration_error_deg) else options.camera)
     imu_roll = np.interp(times, imu.t_s, np.unwrap(imu.roll_rad))
     imu_pitch = np.interp(times, imu.t_s, imu.pitch_rad)
     rng = np.random.default_rng(options.seed)
