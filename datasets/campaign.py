@@ -7,9 +7,13 @@ Layout of the campaign folder::
     DIR/runs/<scenario>-<source>/     ``visland process`` output
     DIR/compare/                      ``visland compare`` of every run (tables, plots)
 
-Resumable: run the same command again after an interruption. Finished datasets are kept
-(``generate`` resumes a half-rendered one frame by frame), runs whose ``run.json`` records
-the same dataset and options are kept, and the comparison is rebuilt. A campaign folder made
+Scenarios are done one after the other (generate, then process with every source), so that
+``--prune-frames`` can delete each scenario's images once its runs are written: a 2048x2048
+campaign of eight approaches otherwise needs tens of GB of PNGs.
+
+Resumable: run the same command again after an interruption. A scenario whose runs are all
+up to date is skipped; a half-rendered dataset resumes frame by frame; the comparison is
+rebuilt. A campaign folder made
 with other settings is refused unless ``--force``. With ``--scheduler``, frames render on the
 Dask cluster and the runs are processed there as one task each.
 """
@@ -66,12 +70,14 @@ class CampaignOptions:
     workers: int = 1
     scheduler: str | None = None
     scene: dict = field(default_factory=dict)
+    prune_frames: bool = False
 
     def settings(self) -> dict:
         """What must match for a campaign folder to be resumed (not workers nor scheduler)."""
         data = asdict(self)
         data.pop("workers")
         data.pop("scheduler")
+        data.pop("prune_frames")
         data["scenarios"] = list(self.scenarios)
         data["sources"] = list(self.sources)
         data["observers"] = list(self.observers)
@@ -93,6 +99,12 @@ def _run_is_current(run_dir: Path, dataset: Path, source: str, observers: tuple)
         return False
     return (data.get("source") == source and list(data.get("observers", [])) == list(observers)
             and info.stat().st_mtime >= manifest)
+
+
+def _prune_frames(dataset: Path) -> None:
+    """Delete a processed dataset's images (they dominate the disk); keep everything else."""
+    import shutil
+    shutil.rmtree(dataset / "frames", ignore_errors=True)
 
 
 def _process_task(dataset: str, run_dir: str, source: str, observers: tuple) -> str:
@@ -140,41 +152,47 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
         velocity_bias = 0.0
         imu_noise = 0.0
 
-    datasets = {}
-    for name in options.scenarios:
-        scenario = resolve_scenario(name)
-        sim_options = simulation_options_from_args(_Args, camera=CameraModel.default(options.size))
-        job = GenerateJob(scenario=scenario, options=sim_options, scene=scene)
-        folder = out / "datasets" / scenario.name
-        echo(f"[{time.perf_counter() - started:6.0f} s] generate {scenario.name} ({options.size} px, {options.fps:g} Hz)")
-        report = generate_dataset(job, folder, workers=options.workers, scheduler=options.scheduler, force=False)
-        echo(f"         {report.n_frames} frames: {report.rendered} rendered, {report.reused} kept, "
-             f"{report.seconds:.0f} s")
-        datasets[scenario.name] = folder
-
-    todo = []
     runs = []
-    for name, dataset in datasets.items():
-        for source in options.sources:
-            run_dir = out / "runs" / f"{name}-{source}"
-            runs.append(run_dir)
-            if _run_is_current(run_dir, dataset, source, observers):
-                echo(f"         {run_dir.name}: up to date, kept")
-            else:
-                todo.append((str(dataset), str(run_dir), source, observers))
-    if options.scheduler and todo:
+    client = None
+    if options.scheduler:
         from dask.distributed import Client
-        echo(f"[{time.perf_counter() - started:6.0f} s] process {len(todo)} runs on {options.scheduler}")
-        with Client(options.scheduler) as client:
-            futures = [client.submit(_process_task, *task, pure=False) for task in todo]
-            for task, text in zip(todo, client.gather(futures)):
-                echo(f"         {Path(task[1]).name}: " + (text.splitlines()[-2] if text.count("\n") else text))
-    else:
-        for task in todo:
-            echo(f"[{time.perf_counter() - started:6.0f} s] process {Path(task[1]).name}")
-            text = _process_task(*task)
-            summary = [line for line in text.splitlines() if "frames: runway found" in line]
-            echo("         " + (summary[0] if summary else text.splitlines()[-1]))
+        client = Client(options.scheduler)
+    try:
+        for name in options.scenarios:
+            scenario = resolve_scenario(name)
+            dataset = out / "datasets" / scenario.name
+            mine = [(out / "runs" / f"{scenario.name}-{source}", source) for source in options.sources]
+            runs.extend(run_dir for run_dir, _ in mine)
+            todo = [(str(dataset), str(run_dir), source, observers) for run_dir, source in mine
+                    if not _run_is_current(run_dir, dataset, source, observers)]
+            if not todo:
+                echo(f"[{time.perf_counter() - started:6.0f} s] {scenario.name}: every run up to date, kept")
+                continue
+            sim_options = simulation_options_from_args(_Args, camera=CameraModel.default(options.size))
+            job = GenerateJob(scenario=scenario, options=sim_options, scene=scene)
+            echo(f"[{time.perf_counter() - started:6.0f} s] generate {scenario.name} ({options.size} px, "
+                 f"{options.fps:g} Hz)")
+            report = generate_dataset(job, dataset, workers=options.workers, scheduler=options.scheduler, force=False)
+            echo(f"         {report.n_frames} frames: {report.rendered} rendered, {report.reused} kept, "
+                 f"{report.seconds:.0f} s")
+            if client is not None:
+                echo(f"[{time.perf_counter() - started:6.0f} s] process {len(todo)} runs on {options.scheduler}")
+                futures = [client.submit(_process_task, *task, pure=False) for task in todo]
+                texts = client.gather(futures)
+            else:
+                texts = []
+                for task in todo:
+                    echo(f"[{time.perf_counter() - started:6.0f} s] process {Path(task[1]).name}")
+                    texts.append(_process_task(*task))
+            for task, text in zip(todo, texts):
+                summary = [line for line in text.splitlines() if "frames: runway found" in line]
+                echo(f"         {Path(task[1]).name}: " + (summary[0] if summary else text.splitlines()[-1]))
+            if options.prune_frames:
+                _prune_frames(dataset)
+                echo(f"         {scenario.name}: frames deleted (--prune-frames); labels, telemetry and runs kept")
+    finally:
+        if client is not None:
+            client.close()
 
     echo(f"[{time.perf_counter() - started:6.0f} s] compare {len(runs)} runs")
     summary = compare_runs(runs, out / "compare", echo=lambda text: None)

@@ -57,7 +57,8 @@ def _cmd_campaign(args) -> int:
     from visland.datasets.campaign import CampaignOptions, parse_scenario_list, run_campaign
     options = CampaignOptions(scenarios=tuple(parse_scenario_list(args.scenarios)), size=args.size, fps=args.fps,
                               sources=tuple(dict.fromkeys(args.sources)), observers=_observers(args.observer),
-                              seed=args.seed, workers=args.workers, scheduler=args.scheduler)
+                              seed=args.seed, workers=args.workers, scheduler=args.scheduler,
+                              prune_frames=args.prune_frames)
     summary = run_campaign(options, args.out, force=args.force)
     print(json.dumps(_headline(summary)))
     return 0
@@ -132,6 +133,9 @@ def register(subparsers):
     p.add_argument("--seed", type=int, default=0, help="seed of every random generator (default 0)")
     p.add_argument("--workers", type=int, default=2, metavar="N", help="local rendering processes (default 2)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--prune-frames", action="store_true",
+                   help="delete each scenario's images once its runs are written (a 2048 px campaign of eight "
+                        "approaches otherwise needs tens of GB)")
     p.add_argument("--force", action="store_true", help="reuse a folder holding another campaign")
     p.set_defaults(func=_cmd_campaign)
 
