@@ -378,10 +378,12 @@ class OffscreenView:
     samples : int
         MSAA samples (0 disables multisampling).
     anisotropy : float
-        Maximum anisotropic filtering ratio for mipmapped textures (1 disables it).
+        OpenGL (hardware) anisotropic filtering ratio for mipmapped textures; 1 disables it.
+        llvmpipe does it in software at about a second per frame, so visland's scenes use 1 and
+        filter the pavements in the shader instead (``SceneParams.anisotropy``).
     """
 
-    def __init__(self, camera: CameraModel, shader_dir: str, samples: int = 4, anisotropy: float = 8.0):
+    def __init__(self, camera: CameraModel, shader_dir: str, samples: int = 4, anisotropy: float = 1.0):
         check_opengl()
         try:
             import pyrender
