@@ -32,8 +32,8 @@ def register(subparsers):
                    help="run the anchor every N frames (default 1)")
     p.add_argument("--policy", default=None,
                    choices=("every_frame", "every_n", "score_drop", "scale_change", "never"),
-                   help="template update policy (overrides --params; default every_frame, the thesis's "
-                        "behaviour, which drifts)")
+                   help="template update policy (overrides --params; default scale_change; every_frame is "
+                        "the thesis's behaviour, which drifts fastest)")
     p.add_argument("--params", metavar="FILE", help="tracker parameters (.json or .toml, see "
                                                     "visland.tracking.TrackerParams)")
     p.add_argument("--start", type=int, default=0, metavar="FRAME", help="designation frame (default 0)")
@@ -58,8 +58,9 @@ def register_bench(bench_subparsers):
     p.add_argument("--points", type=int, default=2, help="tracked points: 2 (threshold corners) or 4 (default 2)")
     p.add_argument("--frames", type=int, default=100, help="frames per run (default 100)")
     p.add_argument("--repeats", type=int, default=5, help="runs; the median is reported (default 5)")
-    p.add_argument("--policy", default="every_frame",
-                   choices=("every_frame", "every_n", "score_drop", "scale_change", "never"))
+    p.add_argument("--policy", default="scale_change",
+                   choices=("every_frame", "every_n", "score_drop", "scale_change", "never"),
+                   help="template update policy (default scale_change, the tracker's default)")
     p.add_argument("--distance", type=float, default=2000.0, metavar="M",
                    help="start the timed frames this far from the threshold (default 2000 m)")
     p.add_argument("--source", default="synthetic", choices=("synthetic", "render"),

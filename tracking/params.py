@@ -9,16 +9,21 @@ point drift"):
     Re-cut the template around the new estimate after every match (the thesis's "Memo"
     behaviour). Follows any change of appearance, but each frame's matching error becomes
     the next frame's reference: the errors add up as a random walk plus any bias (drift).
+    On rendered 2048 px approaches it drifts by tenths of a pixel per frame on the small,
+    noisy corners seen from 5 km and loses them within seconds.
 ``"every_n"``
     Re-cut every :attr:`update_every_n` frames: the error accumulates N times more slowly,
     while the appearance change between updates must stay small enough to match.
 ``"score_drop"``
     Keep the reference until its match score falls below :attr:`update_score_below`, then
     re-cut: as few updates as the appearance change allows.
-``"scale_change"``
+``"scale_change"`` (default)
     Re-cut when the image of the ground around the point has been magnified (or shrunk) by
     more than :attr:`update_scale_ratio` since the reference was cut (about 15 re-cuts from
-    5 km to the threshold at 1.25).
+    5 km to the threshold at 1.25); in between, the reference is warped by the predicted
+    ground-plane motion. Few re-cuts, so little accumulated error, and a reference that
+    still looks like the runway: the default because it drifted least on the rendered
+    thesis approaches (benchmarks/track_drift.py).
 ``"never"``
     Keep the designation template for the whole approach: no accumulation at all, but the
     runway grows about thirty times in the image; without scale adaptation the point is lost
@@ -103,23 +108,35 @@ class TrackerParams:
     consistency_threshold_fraction : float
         Added to the threshold as a fraction of the point configuration's size in pixels
         (model errors grow with the image of the runway).
+    consistency_sigma_px : float
+        Matching noise of one coordinate assumed by the rigid check (0.2 px: the frame-to-frame
+        scatter of matches on rendered runway corners): a point is inconsistent only beyond the
+        threshold plus three standard deviations of where the others place it, and it is
+        re-projected, or searched for when lost, there only when that standard deviation is
+        under half of ``consistency_threshold_px``.
     on_inconsistent : str
         ``"flag"`` (report it, keep tracking), ``"reproject"`` (move the point to where the
         rigid motion puts it and re-cut its template there: the several-points remedy of
         thesis 5.3.2.1) or ``"drop"`` (declare the point lost).
     anchor_min_confidence : float
         Smallest detector confidence at which a detected corner re-anchors a tracked one.
+    anchor_weight : float
+        In (0, 1]: a confident detected corner within the gate moves the tracked point this
+        fraction of the way to it (1: onto it). Under 1 the detector's frame-to-frame noise
+        is averaged while the tracker's drift stays bounded (a complementary filter: the
+        track follows the detections with a lag of about ``1 / anchor_weight`` frames).
     anchor_gate_px : float
-        A detected corner further than this from the tracked point does not re-anchor it at
-        once (no jump to a far-away match) ...
+        A detected corner further than this from the tracked point does not re-anchor it:
+        a point tracked consistently keeps its track (no jump to a far-away match) ...
     anchor_confirm_frames : int
-        ... unless this many consecutive confident detections agree on it (within the gate
-        of one another); the jump is then made and reported.
+        ... and a point that is coasting, lost, refused or inconsistent with the others jumps
+        to the detection only after this many consecutive confident detections agree on it
+        (within the gate of one another); the jump is reported.
     """
 
-    template_size_px: int = 21
+    template_size_px: int = 31
     search_radius_px: int = 16
-    update_policy: str = "every_frame"
+    update_policy: str = "scale_change"
     update_every_n: int = 10
     update_score_below: float = 0.9
     update_scale_ratio: float = 1.25
@@ -135,8 +152,10 @@ class TrackerParams:
     border_margin_px: int = 0
     consistency_threshold_px: float = 3.0
     consistency_threshold_fraction: float = 0.01
+    consistency_sigma_px: float = 0.2
     on_inconsistent: str = "flag"
     anchor_min_confidence: float = 0.5
+    anchor_weight: float = 0.5
     anchor_gate_px: float = 12.0
     anchor_confirm_frames: int = 3
 
@@ -177,10 +196,12 @@ class TrackerParams:
         integer("border_margin_px", 0, 1000)
         number("consistency_threshold_px", 0.0, 10000.0)
         number("consistency_threshold_fraction", 0.0, 1.0)
+        number("consistency_sigma_px", 0.001, 100.0)
         if self.on_inconsistent not in INCONSISTENT_ACTIONS:
             raise ValueError(f"tracker on_inconsistent must be one of {', '.join(INCONSISTENT_ACTIONS)}, "
                              f"got {self.on_inconsistent!r}")
         number("anchor_min_confidence", 0.0, 1.0)
+        number("anchor_weight", 0.01, 1.0)
         number("anchor_gate_px", 0.0, 10000.0)
         integer("anchor_confirm_frames", 1, 1000)
 

@@ -37,7 +37,7 @@ import numpy as np
 
 from visland.tracking.template import apply_homography, homography_jacobian
 
-__all__ = ["PlaneMotion", "ConsistencyResult", "fit_plane_motion", "check_consistency"]
+__all__ = ["PlaneMotion", "ConsistencyResult", "fit_plane_motion", "check_consistency", "prediction_std_px"]
 
 
 @dataclass(frozen=True)
@@ -70,9 +70,12 @@ class ConsistencyResult:
 
     ``motion`` is fitted on the points kept (None if too few equations). ``residual_px`` is
     each point's distance to where ``motion`` puts it (across the edge for edge points; NaN
-    if no motion). ``consistent`` flags points within the threshold; ``decided`` is False
+    if no motion). ``consistent`` flags points within their threshold; ``decided`` is False
     when the points disagree but too few remain to tell which one drifts (or when there are
-    no spare equations at all: ``checked`` False).
+    no spare equations at all: ``checked`` False). ``prediction_std_px`` is how precisely
+    ``motion`` places each point (see :func:`prediction_std_px`, which ``information``, the
+    fit's ``A^T A``, serves for other points): a point may be re-projected or searched for
+    where the motion puts it only when this is small.
     """
 
     motion: PlaneMotion | None
@@ -81,6 +84,8 @@ class ConsistencyResult:
     threshold_px: float
     checked: bool
     decided: bool
+    prediction_std_px: np.ndarray | None = None
+    information: np.ndarray | None = None
 
 
 def _rows(q, y, J, normals):
@@ -104,6 +109,21 @@ def _n_rows(normals, keep) -> int:
     return sum(1 if normals[k] is not None else 2 for k in np.nonzero(keep)[0])
 
 
+def _fit(q, uv, G_virtual_to_pixels, normals, keep):
+    """Least squares of the module docstring: (motion, normal matrix A^T A) or (None, None)."""
+    if _n_rows(normals, keep) < 3:
+        return None, None
+    G_inv = np.linalg.inv(G_virtual_to_pixels)
+    index = np.nonzero(keep)[0]
+    y = apply_homography(G_inv, uv[index])
+    J = [homography_jacobian(G_virtual_to_pixels, y[k]) for k in range(len(index))]
+    A, rhs = _rows(q[index], y, J, [normals[k] for k in index])
+    solution, _, rank, singular = np.linalg.lstsq(A, rhs, rcond=None)
+    if rank < 3 or singular[-1] < 1e-9 * singular[0] or not np.all(np.isfinite(solution)) or solution[0] <= 0:
+        return None, None
+    return PlaneMotion(scale=float(solution[0]), shift=solution[1:].copy()), A.T @ A
+
+
 def fit_plane_motion(q, uv, G_virtual_to_pixels, normals=None, keep=None) -> PlaneMotion | None:
     """Least-squares ground-plane motion from points with known designation coordinates.
 
@@ -123,17 +143,25 @@ def fit_plane_motion(q, uv, G_virtual_to_pixels, normals=None, keep=None) -> Pla
     n = len(q)
     normals = [None] * n if normals is None else list(normals)
     keep = np.ones(n, dtype=bool) if keep is None else np.asarray(keep, dtype=bool)
-    if _n_rows(normals, keep) < 3:
-        return None
-    G_inv = np.linalg.inv(G_virtual_to_pixels)
-    index = np.nonzero(keep)[0]
-    y = apply_homography(G_inv, uv[index])
-    J = [homography_jacobian(G_virtual_to_pixels, y[k]) for k in range(len(index))]
-    A, rhs = _rows(q[index], y, J, [normals[k] for k in index])
-    solution, _, rank, singular = np.linalg.lstsq(A, rhs, rcond=None)
-    if rank < 3 or singular[-1] < 1e-9 * singular[0] or not np.all(np.isfinite(solution)) or solution[0] <= 0:
-        return None
-    return PlaneMotion(scale=float(solution[0]), shift=solution[1:].copy())
+    return _fit(q, uv, G_virtual_to_pixels, normals, keep)[0]
+
+
+def prediction_std_px(motion: PlaneMotion, information: np.ndarray, q, G_virtual_to_pixels,
+                      sigma_px: float) -> np.ndarray:
+    """Standard deviation (pixels, largest axis) of where ``motion`` puts points ``q (k, 2)``.
+
+    With each fitted equation's pixel noise ``sigma_px``, the motion's covariance is
+    ``sigma^2 (A^T A)^-1``; a point's pixel ``G(s q + b)`` moves by ``J_G [q | I]`` per unit of
+    ``(s, b)``, which carries the covariance to the image.
+    """
+    q = np.asarray(q, dtype=float).reshape(-1, 2)
+    covariance = sigma_px ** 2 * np.linalg.inv(information)
+    out = np.empty(len(q))
+    for k, qk in enumerate(q):
+        J_G = homography_jacobian(G_virtual_to_pixels, motion.virtual(qk))
+        J = J_G @ np.column_stack([qk, np.eye(2)])
+        out[k] = math.sqrt(max(float(np.linalg.eigvalsh(J @ covariance @ J.T)[-1]), 0.0))
+    return out
 
 
 def _residuals(motion, q, uv, G, normals) -> np.ndarray:
@@ -144,17 +172,20 @@ def _residuals(motion, q, uv, G, normals) -> np.ndarray:
     return out
 
 
-def check_consistency(q, uv, G_virtual_to_pixels, threshold_px: float, normals=None) -> ConsistencyResult:
+def check_consistency(q, uv, G_virtual_to_pixels, threshold_px: float, normals=None,
+                      sigma_px: float = 0.2) -> ConsistencyResult:
     """Fit the shared ground-plane motion and find the points that do not follow it.
 
-    Parameters as :func:`fit_plane_motion`; ``threshold_px`` is the largest accepted
-    distance between a point and where the *other* points' motion puts it (leave-one-out:
-    a drifting point would otherwise pull the fit towards itself and hide). The worst point
-    beyond the threshold is set aside and the search repeated on the rest, as long as the
-    rest still has a spare equation. When no point can be left out (two corner points: four
-    equations for three unknowns), the disagreement is twice the largest in-sample residual
-    (one point displaced by e across the segment leaves e / 2 on each) and, if it exceeds the
-    threshold, ``decided`` is False.
+    Parameters as :func:`fit_plane_motion`; ``sigma_px`` is the matching noise of one
+    coordinate. A point is inconsistent when its distance to where the *other* points'
+    motion puts it (leave-one-out: a drifting point would otherwise pull the fit towards
+    itself) exceeds ``threshold_px`` plus three times that prediction's standard deviation
+    (a small, far-away configuration predicts a point only loosely). The point most beyond
+    its threshold is set aside (the one whose removal leaves the others most consistent) and
+    the test repeated on the rest while a spare equation remains. When no point can be left
+    out (two corner points: four equations for three unknowns) the disagreement is twice the
+    largest in-sample residual (one point displaced by e across the segment leaves e / 2 on
+    each) and, beyond the threshold, ``decided`` is False.
     """
     q = np.asarray(q, dtype=float).reshape(-1, 2)
     uv = np.asarray(uv, dtype=float).reshape(-1, 2)
@@ -162,54 +193,59 @@ def check_consistency(q, uv, G_virtual_to_pixels, threshold_px: float, normals=N
     normals = [None] * n if normals is None else list(normals)
     if not (math.isfinite(threshold_px) and threshold_px >= 0):
         raise ValueError(f"threshold_px must be a non-negative number, got {threshold_px!r}")
+    if not (math.isfinite(sigma_px) and sigma_px > 0):
+        raise ValueError(f"sigma_px must be a positive number, got {sigma_px!r}")
     keep = np.ones(n, dtype=bool)
     nan = np.full(n, np.nan)
-    motion = fit_plane_motion(q, uv, G_virtual_to_pixels, normals, keep)
+    motion, information = _fit(q, uv, G_virtual_to_pixels, normals, keep)
     if motion is None:
         return ConsistencyResult(None, nan, np.zeros(n, dtype=bool), threshold_px, False, False)
     if _n_rows(normals, keep) <= 3:
         # no spare equation: the motion fits exactly, nothing can be checked
         residual = _residuals(motion, q, uv, G_virtual_to_pixels, normals)
-        return ConsistencyResult(motion, residual, np.ones(n, dtype=bool), threshold_px, False, False)
+        return ConsistencyResult(motion, residual, np.ones(n, dtype=bool), threshold_px, False, False,
+                                 prediction_std_px(motion, information, q, G_virtual_to_pixels, sigma_px),
+                                 information)
     decided = True
     while True:
-        # leave-one-out: each point against the motion of the others
-        worst = -1.0
+        worst_excess, any_left_out = -math.inf, False
         for k in np.nonzero(keep)[0]:
             others = keep.copy()
             others[k] = False
-            trial = fit_plane_motion(q, uv, G_virtual_to_pixels, normals, others)
-            if trial is not None:
-                worst = max(worst, float(_residuals(trial, q[k:k + 1], uv[k:k + 1], G_virtual_to_pixels,
-                                                    [normals[k]])[0]))
-        if worst < 0.0:
-            # no point can be left out (two corner points): judge the in-sample residuals
+            trial, trial_information = _fit(q, uv, G_virtual_to_pixels, normals, others)
+            if trial is None:
+                continue
+            any_left_out = True
+            left_out = float(_residuals(trial, q[k:k + 1], uv[k:k + 1], G_virtual_to_pixels, [normals[k]])[0])
+            spread = float(prediction_std_px(trial, trial_information, q[k:k + 1], G_virtual_to_pixels, sigma_px)[0])
+            worst_excess = max(worst_excess, left_out - (threshold_px + 3.0 * spread))
+        if not any_left_out:
             residual = _residuals(motion, q, uv, G_virtual_to_pixels, normals)
             if 2.0 * float(np.max(residual[keep])) > threshold_px:
                 decided = False
             break
-        if worst <= threshold_px:
+        if worst_excess <= 0.0:
             break
-        # set aside the point whose removal leaves the others most consistent
         best = None
         for k in np.nonzero(keep)[0]:
             others = keep.copy()
             others[k] = False
             if _n_rows(normals, others) <= 3:
                 continue        # the others would fit exactly: nothing left to check them against
-            trial = fit_plane_motion(q, uv, G_virtual_to_pixels, normals, others)
+            trial, trial_information = _fit(q, uv, G_virtual_to_pixels, normals, others)
             if trial is None:
                 continue
             spread = float(np.max(_residuals(trial, q, uv, G_virtual_to_pixels, normals)[others]))
             if best is None or spread < best[0]:
-                best = (spread, k, trial)
+                best = (spread, k, trial, trial_information)
         if best is None:
             decided = False
             break
         keep[best[1]] = False
-        motion = best[2]
+        motion, information = best[2], best[3]
     residual = _residuals(motion, q, uv, G_virtual_to_pixels, normals)
-    consistent = keep & (residual <= threshold_px)
+    std = prediction_std_px(motion, information, q, G_virtual_to_pixels, sigma_px)
+    consistent = keep & (residual <= threshold_px + 3.0 * std)
     if not decided:
         consistent = np.zeros(n, dtype=bool)
-    return ConsistencyResult(motion, residual, consistent, threshold_px, True, decided)
+    return ConsistencyResult(motion, residual, consistent, threshold_px, True, decided, std, information)

@@ -41,11 +41,16 @@ from visland.tracking.anchoring import AnchorObservation
 from visland.tracking.motion import (Attitude, R_camera_from_level, rotation_homography,
                                      virtual_to_pixel_homography)
 from visland.tracking.params import TrackerParams
-from visland.tracking.rigid import PlaneMotion, check_consistency
+from visland.tracking.rigid import PlaneMotion, check_consistency, prediction_std_px
 from visland.tracking.template import (ReferencePatch, Texture, apply_homography, cut_reference, homography_jacobian,
                                        match_in_window, patch_texture, template_from_reference)
 
 __all__ = ["PointTracker", "PointReport", "TrackStep", "MEASURED_STATUSES", "POINT_STATUSES"]
+
+#: Rigid-motion fits kept to predict the ground-plane motion (a straight-line fit over about
+#: 0.4 s at 25 Hz smooths the frame-to-frame scatter of the fits; a two-point extrapolation
+#: amplifies it and, through the template warp, feeds it back into the matches).
+MOTION_HISTORY = 10
 
 #: Per-point statuses of a frame. Measured ones carry a position in the outputs.
 POINT_STATUSES = ("designated", "tracked", "anchored", "reprojected", "inconsistent",
@@ -121,7 +126,7 @@ class _Point:
     cut_frame: int = 0
     cut_R_camera_from_level: np.ndarray | None = None
     cut_motion: PlaneMotion | None = None
-    cut_size_px: float = math.nan
+    cut_configuration: dict = field(default_factory=dict)
     q: np.ndarray | None = None
     score: float = math.nan
     residual_px: float = math.nan
@@ -166,6 +171,7 @@ class PointTracker:
         self._heading_reference = None
         self._R_prev = None
         self._motions: list[tuple[int, PlaneMotion]] = []
+        self._configuration: dict = {}
         self._reference_half = int(math.ceil(1.5 * params.half_template_px)) + 1
 
     # ----------------------------------------------------------------- public
@@ -226,11 +232,11 @@ class PointTracker:
             for p in usable:
                 p.q = apply_homography(G_inv, p.uv)
             self._motions.append((self._frame, PlaneMotion(1.0, np.zeros(2))))
-        size = self._configuration_size([p.uv for p in usable])
+        self._configuration = {p.name: p.uv.copy() for p in usable}
         for p in usable:
             p.cut_R_camera_from_level = R_now
             p.cut_motion = self._motions[-1][1] if self._motions else None
-            p.cut_size_px = size
+            p.cut_configuration = dict(self._configuration)
         self._started = True
         return self._report(None, False, None, "designation")
 
@@ -273,46 +279,41 @@ class PointTracker:
         H_rotation = None
         if R_now is not None and self._R_prev is not None and params.use_inertial_prediction:
             H_rotation = rotation_homography(R_now @ self._R_prev.T, self.camera)
-        motion_guess = self._extrapolated_motion(index) if G_now is not None else None
+        motion_guess = self._smoothed_motion(index) if G_now is not None else None
 
         bases = {}
         for p in self._points:
             p.residual_px = math.nan
-            if p.status == "refused":
-                continue
-            if p.status == "lost":
-                self._search_lost(p, image, motion_guess, G_now, R_now)
+            if not p.active:
                 continue
             base = apply_homography(H_rotation, p.uv) if H_rotation is not None else p.uv.copy()
             bases[p.name] = base
-            predicted = base + gap * p.velocity
-            if p.status == "coasting" and motion_guess is not None and p.q is not None:
-                predicted = motion_guess.pixels(p.q, G_now)
-            self._match(p, image, predicted, motion_guess, G_now, R_now)
+            self._match(p, image, base + gap * p.velocity, motion_guess, G_now, R_now)
 
-        note = ""
-        if anchor is not None:
-            note = self._apply_anchor(anchor, index)
-
-        motion, checked = None, False
+        notes = []
+        motion, checked, fit = None, False, None
         if G_now is not None:
-            motion, checked, consistency_note = self._check_rigid(G_now)
-            if consistency_note:
-                note = "; ".join(x for x in (note, consistency_note) if x)
-            if motion is not None:
-                self._motions = (self._motions + [(index, motion)])[-2:]
-                for p in self._points:
-                    if p.q is None and p.status in MEASURED_STATUSES:
-                        p.q = motion.designation(apply_homography(np.linalg.inv(G_now), p.uv))
-                    if p.status == "coasting" and p.q is not None:
-                        p.uv = motion.pixels(p.q, G_now)
+            motion, checked, consistency_note, fit = self._check_rigid(G_now)
+            notes.append(consistency_note)
+        if anchor is not None:
+            notes.append(self._apply_anchor(anchor, index, motion, G_now))
+        note = "; ".join(x for x in notes if x)
+        if motion is not None and (fit.decided or not fit.checked):
+            self._motions = (self._motions + [(index, motion)])[-MOTION_HISTORY:]
+            for p in self._points:
+                if p.q is None and p.status in MEASURED_STATUSES:
+                    p.q = motion.designation(apply_homography(np.linalg.inv(G_now), p.uv))
+            self._follow_rigid_motion(image, motion, fit, G_now, R_now)
 
-        size = self._configuration_size([p.uv for p in self._points if p.status in MEASURED_STATUSES])
+        configuration = {p.name: p.uv.copy() for p in self._points if p.status in MEASURED_STATUSES}
         for p in self._points:
             if p.status in ("tracked", "inconsistent") and p.name in bases:
                 p.velocity = (p.uv - bases[p.name]) / gap
+        smoothed = self._smoothed_motion(index) if motion is not None else None
+        for p in self._points:
             if p.status in MEASURED_STATUSES:
-                self._maybe_update_template(p, image, index, R_now, motion, size, G_now)
+                self._maybe_update_template(p, image, index, R_now, smoothed, configuration, G_now)
+        self._configuration = configuration
         self._R_prev = R_now
         return self._report(motion, checked, anchor, note)
 
@@ -351,10 +352,22 @@ class PointTracker:
         return patch_texture(central, self.params.min_texture, self.params.min_contrast)
 
     # ----------------------------------------------------------------- matching
-    def _warp_reference_from_image(self, p: _Point, predicted, motion_guess, G_now, R_now):
-        """2x2 map of displacements now -> in the reference image, or None if unknown."""
+    def _warp_reference_from_image(self, p: _Point, predicted, motion_guess, G_now, R_now, configuration=None):
+        """2x2 map of displacements now -> in the reference image, or None if unknown.
+
+        With the inertial attitude: the local derivative of the ground-plane homography from
+        now to the cut (module :mod:`visland.tracking.rigid`), or of the rotation alone when
+        no rigid motion is known. Without it: the similarity (scale and rotation) of the
+        point configuration between the cut and now (``configuration``, default the last
+        frame's), when at least two points are common to both.
+        """
         if R_now is None or p.cut_R_camera_from_level is None:
-            return None
+            similarity = _similarity(p.cut_configuration,
+                                     self._configuration if configuration is None else configuration)
+            if similarity is None:
+                return None
+            rotation = np.array([[similarity.real, similarity.imag], [-similarity.imag, similarity.real]])
+            return rotation / abs(similarity) ** 2
         G_cut = virtual_to_pixel_homography(p.cut_R_camera_from_level, self.camera)
         if motion_guess is not None and p.cut_motion is not None:
             # pixels now -> designation coordinates -> pixels at the cut (module rigid)
@@ -407,30 +420,62 @@ class PointTracker:
         p.reason = reason
         p.velocity = np.zeros(2)
 
-    def _search_lost(self, p: _Point, image, motion_guess, G_now, R_now) -> None:
-        """Look for a lost point only where the other points' rigid motion puts it."""
-        if motion_guess is None or p.q is None or p.reference is None:
+    def _reliable_limit_px(self) -> float:
+        """Largest standard deviation of a rigid prediction that the tracker acts on."""
+        return self.params.consistency_threshold_px / 2.0
+
+    def _follow_rigid_motion(self, image, motion, fit, G_now, R_now) -> None:
+        """Put coasting points where the rigid motion puts them, and look for lost ones there.
+
+        Only where the motion places the point precisely (standard deviation under half the
+        consistency threshold): a loose prediction would send the search, and the point,
+        somewhere else.
+        """
+        if fit is None or fit.information is None or not fit.decided:
             return
-        predicted = motion_guess.pixels(p.q, G_now)
-        half = self.params.half_template_px
-        if not (np.all(np.isfinite(predicted)) and half <= predicted[0] <= self.camera.width - 1 - half
-                and half <= predicted[1] <= self.camera.height - 1 - half):
-            return
-        A = self._warp_reference_from_image(p, predicted, motion_guess, G_now, R_now)
-        template, offset = template_from_reference(p.reference, self.params.template_size_px,
-                                                   A if self.params.scale_adaptation else None)
-        match = match_in_window(image, template, offset, predicted, self.params.search_radius_px,
-                                self.params.min_score, self.params.ambiguity_margin, self.params.ambiguity_distance_px,
-                                self.params.subpixel)
-        if match.found:
-            p.uv = match.uv
-            p.score = match.score
-            p.status = "tracked"
-            p.coast_count = 0
-            p.reason = f"re-acquired {np.hypot(*(match.uv - predicted)):.1f} px from the rigid prediction"
+        params = self.params
+        for p in self._points:
+            if p.q is None or p.status not in ("coasting", "lost"):
+                continue
+            std = float(prediction_std_px(motion, fit.information, p.q, G_now, params.consistency_sigma_px)[0])
+            if not std <= self._reliable_limit_px():
+                continue
+            predicted = motion.pixels(p.q, G_now)
+            if p.status == "coasting":
+                p.uv = predicted
+                continue
+            if p.reference is None:
+                continue
+            half = params.half_template_px
+            if not (np.all(np.isfinite(predicted)) and half <= predicted[0] <= self.camera.width - 1 - half
+                    and half <= predicted[1] <= self.camera.height - 1 - half):
+                continue
+            radius = params.consistency_threshold_px + 3.0 * std
+            A = self._warp_reference_from_image(p, predicted, motion, G_now, R_now)
+            template, offset = template_from_reference(p.reference, params.template_size_px,
+                                                       A if params.scale_adaptation else None)
+            match = match_in_window(image, template, offset, predicted, int(math.ceil(radius)) + 1,
+                                    params.min_score, params.ambiguity_margin, params.ambiguity_distance_px,
+                                    params.subpixel)
+            distance = float(np.hypot(*(match.uv - predicted))) if match.found else math.inf
+            if distance <= radius:
+                p.uv = match.uv
+                p.score = match.score
+                p.status = "tracked"
+                p.coast_count = 0
+                p.velocity = np.zeros(2)
+                p.reason = f"re-acquired {distance:.1f} px from where the other points put it"
 
     # ----------------------------------------------------------------- anchoring
-    def _apply_anchor(self, anchor: AnchorObservation, index: int) -> str:
+    def _apply_anchor(self, anchor: AnchorObservation, index: int, motion, G_now) -> str:
+        """Re-anchor corners on confident detections (after the rigid check of this frame).
+
+        A detection within ``anchor_gate_px`` of the track pulls the point towards it by
+        ``anchor_weight``. A farther one is followed only when the track is not trusted
+        (coasting, lost, refused, or inconsistent with the other points) and only after
+        ``anchor_confirm_frames`` consecutive detections agree; a point tracked consistently
+        keeps its track (a detector can lock onto a taxiway).
+        """
         params = self.params
         if not anchor.found:
             for p in self._points:
@@ -440,6 +485,7 @@ class PointTracker:
             for p in self._points:
                 p.pending_anchor = []
             return f"anchor: not used (confidence {anchor.confidence:.2f} < {params.anchor_min_confidence:.2f})"
+        G_inv = np.linalg.inv(G_now) if G_now is not None else None
         for p in self._points:
             if p.corner is None:
                 continue
@@ -450,24 +496,34 @@ class PointTracker:
             has_position = p.status in MEASURED_STATUSES or p.status == "coasting"
             distance = float(np.hypot(*(detected - p.uv))) if has_position else math.inf
             if distance <= params.anchor_gate_px:
-                self._anchor_point(p, detected, f"anchored {distance:.1f} px from the track")
+                w = params.anchor_weight
+                self._anchor_point(p, p.uv + w * (detected - p.uv),
+                                   f"anchored: detected {distance:.1f} px from the track, weight {w:g}")
+            elif p.status == "tracked":
+                p.pending_anchor = []
+                note = f"detected corner {distance:.0f} px away (gate {params.anchor_gate_px:g} px): kept the track"
+                p.reason = f"{p.reason}; {note}" if p.reason else note
                 continue
-            # a chain of detections on consecutive frames, each within the gate of the one before
-            pending = list(p.pending_anchor)
-            if pending and (pending[-1][0] != index - 1
-                            or np.hypot(*(detected - pending[-1][1])) > params.anchor_gate_px):
-                pending = []
-            pending.append((index, detected))
-            p.pending_anchor = pending[-params.anchor_confirm_frames:]
-            if len(p.pending_anchor) >= params.anchor_confirm_frames:
+            else:
+                # a chain of detections on consecutive frames, each within the gate of the one before
+                pending = list(p.pending_anchor)
+                if pending and (pending[-1][0] != index - 1
+                                or np.hypot(*(detected - pending[-1][1])) > params.anchor_gate_px):
+                    pending = []
+                pending.append((index, detected))
+                p.pending_anchor = pending[-params.anchor_confirm_frames:]
+                if len(p.pending_anchor) < params.anchor_confirm_frames:
+                    gap = f"{distance:.0f} px away" if has_position else f"found while {p.status}"
+                    note = (f"detected corner {gap} (gate {params.anchor_gate_px:g} px): not followed yet "
+                            f"({len(p.pending_anchor)}/{params.anchor_confirm_frames})")
+                    p.reason = f"{p.reason}; {note}" if p.reason else note
+                    continue
                 where = f"{distance:.0f} px from the track" if has_position else f"while {p.status}"
                 self._anchor_point(p, detected, f"re-anchored {where} after {len(p.pending_anchor)} "
                                                "agreeing detections")
-            else:
-                gap = f"{distance:.0f} px away" if has_position else f"found while {p.status}"
-                note = (f"detected corner {gap} (gate {params.anchor_gate_px:g} px): not followed yet "
-                        f"({len(p.pending_anchor)}/{params.anchor_confirm_frames})")
-                p.reason = f"{p.reason}; {note}" if p.reason else note
+            if motion is not None and G_inv is not None:
+                # the detector is trusted over the designation: re-base the point's plane position
+                p.q = motion.designation(apply_homography(G_inv, p.uv))
         return ""
 
     def _anchor_point(self, p: _Point, detected, reason: str) -> None:
@@ -480,75 +536,84 @@ class PointTracker:
 
     # ----------------------------------------------------------------- rigid check
     def _check_rigid(self, G_now):
+        """Rigid check of the measured points: (motion, checked, note, ConsistencyResult or None)."""
         params = self.params
         members = [p for p in self._points if p.status in MEASURED_STATUSES and p.q is not None]
         if len(members) < 2:
-            return None, False, ""
+            return None, False, "", None
         uv = np.array([p.uv for p in members])
         q = np.array([p.q for p in members])
         normals = [p.edge_normal for p in members]
         threshold = params.consistency_threshold_px + params.consistency_threshold_fraction * \
             self._configuration_size(uv)
-        result = check_consistency(q, uv, G_now, threshold, normals)
+        result = check_consistency(q, uv, G_now, threshold, normals, params.consistency_sigma_px)
         if result.motion is None:
-            return None, False, ""
+            return None, False, "", None
         for k, p in enumerate(members):
             p.residual_px = float(result.residual_px[k])
         if not result.checked:
-            return result.motion, False, ""
+            return result.motion, False, "", result
         if not result.decided:
             worst = float(np.nanmax(result.residual_px))
             names = ", ".join(p.name for p in members)
             return result.motion, True, (f"points {names} disagree with one rigid runway motion by up to "
-                                         f"{worst:.1f} px (> {threshold:.1f}); too few points to tell which drifts")
+                                         f"{2 * worst:.1f} px (> {threshold:.1f}); too few points to tell which "
+                                         "drifts"), result
         for k, p in enumerate(members):
             if result.consistent[k]:
                 continue
             residual = float(result.residual_px[k])
-            if p.status == "anchored":
-                # the detector is trusted over the designation: re-base the point on it
-                p.q = result.motion.designation(apply_homography(np.linalg.inv(G_now), p.uv))
-                p.reason += f"; designation re-based ({residual:.1f} px off the rigid motion)"
-                continue
-            text = f"{residual:.1f} px off the rigid motion of the others (> {threshold:.1f})"
-            if params.on_inconsistent == "flag":
+            std = float(result.prediction_std_px[k])
+            text = f"{residual:.1f} px off the rigid motion of the others (> {threshold:.1f} + 3 x {std:.1f})"
+            action = params.on_inconsistent
+            if action == "reproject" and not std <= self._reliable_limit_px():
+                action = "flag"
+                text += f"; not moved (the others place it only to +-{std:.1f} px)"
+            if action == "flag":
                 p.status = "inconsistent"
                 p.reason = text
-            elif params.on_inconsistent == "reproject":
+            elif action == "reproject":
                 p.uv = result.motion.pixels(p.q, G_now)
                 p.status = "reprojected"
                 p.reason = text + "; moved onto it"
             else:
                 self._lose(p, text + "; dropped")
-        return result.motion, True, ""
+        return result.motion, True, "", result
 
-    def _extrapolated_motion(self, index: int) -> PlaneMotion | None:
-        """Ground-plane motion at ``index`` extrapolated from the last two fits (constant rate)."""
+    def _smoothed_motion(self, index: int) -> PlaneMotion | None:
+        """Ground-plane motion at frame ``index`` from the recent rigid fits.
+
+        A straight line through the last fits (log-scale and shift against the frame index,
+        least squares) evaluated at ``index``: constant-rate motion, which over
+        :data:`MOTION_HISTORY` frames is what an approach does; fewer than three fits give
+        the last one. None when the last fit is more than a second (25 frames) old.
+        """
         if not self._motions:
             return None
-        (k2, m2) = self._motions[-1]
-        if len(self._motions) < 2:
-            return m2
-        (k1, m1) = self._motions[-2]
-        ratio = (index - k2) / (k2 - k1)
-        scale = m2.scale * (m2.scale / m1.scale) ** ratio
-        shift = m2.shift + ratio * (m2.shift - m1.shift)
-        if not (math.isfinite(scale) and scale > 0 and np.all(np.isfinite(shift))):
-            return m2
-        return PlaneMotion(scale, shift)
+        frames = np.array([k for k, _ in self._motions], dtype=float)
+        if index - frames[-1] > 25:
+            return None
+        if len(self._motions) < 3:
+            return self._motions[-1][1]
+        log_scale = np.log([m.scale for _, m in self._motions])
+        shift = np.array([m.shift for _, m in self._motions])
+        t = frames - frames[-1]
+        design = np.column_stack([np.ones_like(t), t])
+        coefficients, *_ = np.linalg.lstsq(design, np.column_stack([log_scale, shift]), rcond=None)
+        at = np.array([1.0, index - frames[-1]]) @ coefficients
+        if not np.all(np.isfinite(at)):
+            return self._motions[-1][1]
+        return PlaneMotion(float(np.exp(at[0])), at[1:].copy())
 
     # ----------------------------------------------------------------- template update
-    def _magnification(self, p: _Point, R_now, motion, G_now, size) -> float:
+    def _magnification(self, p: _Point, R_now, motion, G_now, configuration) -> float:
         """How much the ground around the point has grown in the image since its reference was cut."""
-        if R_now is not None:
-            A = self._warp_reference_from_image(p, p.uv, motion, G_now, R_now)
-            if A is not None:
-                return 1.0 / math.sqrt(abs(float(np.linalg.det(A))))
-        if math.isfinite(size) and math.isfinite(p.cut_size_px) and p.cut_size_px > 0:
-            return size / p.cut_size_px
-        return 1.0
+        A = self._warp_reference_from_image(p, p.uv, motion, G_now, R_now, configuration)
+        if A is None:
+            return 1.0
+        return 1.0 / math.sqrt(abs(float(np.linalg.det(A))))
 
-    def _maybe_update_template(self, p: _Point, image, index, R_now, motion, size, G_now) -> None:
+    def _maybe_update_template(self, p: _Point, image, index, R_now, motion, configuration, G_now) -> None:
         params = self.params
         policy = params.update_policy
         if p.status in ("anchored", "reprojected"):
@@ -560,7 +625,7 @@ class PointTracker:
         elif policy == "score_drop":
             cut = math.isfinite(p.score) and p.score < params.update_score_below
         elif policy == "scale_change":
-            magnification = self._magnification(p, R_now, motion, G_now, size)
+            magnification = self._magnification(p, R_now, motion, G_now, configuration)
             cut = max(magnification, 1.0 / magnification) >= params.update_scale_ratio
         else:
             cut = False
@@ -579,7 +644,7 @@ class PointTracker:
         p.cut_frame = index
         p.cut_R_camera_from_level = R_now
         p.cut_motion = motion
-        p.cut_size_px = size
+        p.cut_configuration = dict(configuration)
 
     # ----------------------------------------------------------------- helpers
     def _report(self, motion, checked, anchor, note) -> TrackStep:
@@ -625,3 +690,23 @@ class PointTracker:
         if isinstance(frame_index, bool) or not isinstance(frame_index, (int, np.integer)) or frame_index <= self._frame:
             raise ValueError(f"frame_index must be an integer after the last frame {self._frame}, got {frame_index!r}")
         return int(frame_index)
+
+
+def _similarity(before: dict, after: dict) -> complex | None:
+    """Scale-and-rotation ``a`` (complex) best mapping the common points: ``after ~ a before`` (centred).
+
+    Least squares in complex form: ``a = sum conj(z_before) z_after / sum |z_before|^2`` over
+    the points both configurations hold (at least two, spread over more than a pixel).
+    """
+    names = [n for n in before if n in after]
+    if len(names) < 2:
+        return None
+    z0 = np.array([complex(*before[n]) for n in names])
+    z1 = np.array([complex(*after[n]) for n in names])
+    z0 = z0 - z0.mean()
+    z1 = z1 - z1.mean()
+    energy = float(np.sum(np.abs(z0) ** 2))
+    if energy < 1.0:
+        return None
+    a = complex(np.sum(np.conj(z0) * z1) / energy)
+    return a if np.isfinite(a) and abs(a) > 1e-3 else None

@@ -106,3 +106,21 @@ def test_too_few_equations_are_not_checked():
     assert fit_plane_motion([[0.1, 0.2]], [[500.0, 600.0]], G) is None
     result = check_consistency([[0.1, 0.2]], [[500.0, 600.0]], G, threshold_px=1.0)
     assert result.motion is None and not result.checked
+
+
+def test_prediction_spread_matches_monte_carlo():
+    """sigma^2 (A^T A)^-1 carried to the image equals the scatter of refits on noisy points."""
+    from visland.tracking.rigid import _fit, prediction_std_px
+    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-450.0, 20.0, -30.0])
+    uv0, uvk = view(c0, 0.0, 1.0, 3.0)[:4], view(ck, 1.0, 2.0, 1.0)[:4]
+    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
+    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(4)]).T).T
+    q = q[:, :2] / q[:, 2:3]
+    keep = np.array([True, False, True, True])
+    motion, information = _fit(q, uvk, Gk, [None] * 4, keep)
+    predicted_std = prediction_std_px(motion, information, q[1:2], Gk, 0.2)[0]
+    rng = np.random.default_rng(0)
+    samples = np.array([fit_plane_motion(q, uvk + rng.normal(0.0, 0.2, uvk.shape), Gk, keep=keep).pixels(q[1], Gk)
+                        for _ in range(2000)])
+    monte_carlo = math.sqrt(np.linalg.eigvalsh(np.cov(samples.T))[-1])
+    assert abs(predicted_std - monte_carlo) < 0.05 * monte_carlo
