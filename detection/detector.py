@@ -214,6 +214,9 @@ def _predict(previous: DetectionResult, ctx: _Context, ground):
     return prediction, roi
 
 
+_WEAK = "runway candidate too weak"
+
+
 def _hypothesis_of(prediction: Prediction) -> RunwayHypothesis:
     return RunwayHypothesis(s0=prediction.s0, k_left=prediction.k_left, k_right=prediction.k_right,
                             d_far=prediction.d_far, d_near=prediction.d_near, polarity_left=0, polarity_right=0,
@@ -236,6 +239,10 @@ def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
         if result is not None:
             return result, None
         reasons.append(why)
+        if why.startswith(_WEAK):
+            # the best-ranked runway that holds together geometrically decides: a weaker-ranked
+            # one (a taxiway beside it) is not taken in its place
+            break
     return None, reasons[0]
 
 
@@ -261,7 +268,7 @@ def _image_span(line: PixelLine, width: int, height: int, margin: float = 1.0) -
 
 
 def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slope: float,
-                 halfwidth_px: float) -> LineFit | None:
+                 halfwidth_px: float, band_fraction: float = 0.1) -> LineFit | None:
     """Sub-pixel edge along the pencil line (s0, k) between depths ``d_far`` and ``d_near``.
 
     ``outward_s`` is the side (in s) of the runway's outside; ``width_slope`` the runway's width
@@ -286,8 +293,16 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
         depth = np.maximum(d_ref + np.asarray(t) / scale, 0.0)
         return 0.04 * abs(width_slope) * depth / scale + 1.5
 
+    def band(t):
+        # never wider than a tenth of the runway's local width (a quarter when tracking a
+        # prediction that may have moved), where markings inside it (aiming point, touchdown
+        # zone) would become the strongest step
+        depth = np.maximum(d_ref + np.asarray(t) / scale, 0.0)
+        width = abs(width_slope) * depth / scale
+        return np.clip(band_fraction * width, 2.0, halfwidth_px)
+
     return refine_line(ctx.image, line, (t_lo, t_hi), "edge", polarity=0,
-                       halfwidth_px=halfwidth_px, n_samples=params.refine_samples,
+                       halfwidth_px=band, n_samples=params.refine_samples,
                        iterations=params.refine_iterations, min_contrast=params.min_contrast,
                        outward=outward_s * sign, outward_reach_px=reach)
 
@@ -356,7 +371,8 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     d_lo, d_hi = (hypothesis.d_far, hypothesis.d_near) if extent is None else extent
     inset = 0.03 * (d_hi - d_lo)
     for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
-        fit = _refine_edge(ctx, hypothesis.s0, k, d_lo + inset, d_hi - inset, outward, width_slope, halfwidth)
+        fit = _refine_edge(ctx, hypothesis.s0, k, d_lo + inset, d_hi - inset, outward, width_slope, halfwidth,
+                           band_fraction=0.1 if prediction is None else 0.25)
         if fit is None:
             return None, f"{name} edge: no consistent grey-level step along the candidate line"
         length = fit.extent[1] - fit.extent[0]
@@ -475,11 +491,11 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     q_support = math.sqrt(fits["left"].support * fits["right"].support)
     q_residual = math.exp(-0.5 * (max(fits["left"].residual_px, fits["right"].residual_px) / 0.8) ** 2)
     chi = abs(s0_l - s0_r) / max(tolerance / 3.0, 1e-6)
-    q_vp = math.exp(-0.5 * (chi / 2.0) ** 2)
+    q_vp = math.exp(-0.5 * (chi / 3.0) ** 2)
     q_contrast = min(1.0, min(fits["left"].contrast, fits["right"].contrast) / (4.0 * params.min_contrast))
     confidence = q_support * q_residual * q_vp * math.sqrt(q_contrast) * (1.0 if centre_fit is not None else 0.85)
     if confidence < params.min_confidence:
-        return None, (f"runway candidate too weak (confidence {confidence:.2f} < {params.min_confidence:g}: "
+        return None, (f"{_WEAK} (confidence {confidence:.2f} < {params.min_confidence:g}: "
                       f"support {q_support:.2f}, residual {q_residual:.2f}, horizon agreement {q_vp:.2f}, "
                       f"contrast {q_contrast:.2f})")
     lines = {name: _line_chart(camera, fits[name].line.homogeneous()) for name in ("left", "right")}

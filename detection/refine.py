@@ -418,7 +418,7 @@ def fit_line(points: np.ndarray, weights: np.ndarray, min_sigma_px: float = 0.05
 def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", polarity: int = 0,
                 halfwidth_px: float = 6.0, n_samples: int = 200, iterations: int = 3,
                 min_contrast: float = 6.0, outward: int = 0, outward_reach_px=0.0,
-                stripe_width_px=None) -> LineFit | None:
+                stripe_width_px=None, net_polarity: int = 0) -> LineFit | None:
     """Refine ``line`` on ``image`` between positions ``t_range`` along it.
 
     Parameters
@@ -431,8 +431,9 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
     kind : "edge" or "stripe"
     polarity : +1/-1 (sign of the grey change along ``line.normal``, or bright/dark stripe),
         0 to take the stronger of either (edges only).
-    halfwidth_px : float
-        First search band; each later pass halves it (not below 2.5 px).
+    halfwidth_px : float or callable
+        First search band (or a function of the position t along the line giving it); each
+        later pass halves it (not below 2.5 px).
     n_samples : int
         Profiles along the line (at most one per pixel).
     min_contrast : float
@@ -443,6 +444,10 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         position t along the line).
     stripe_width_px : callable t -> width or None
         Widest stripe expected at each position (stripes only).
+    net_polarity : int
+        With ``outward``: the sign of the grey-level change from inside to outside the region
+        (0: the majority of the profiles says). Profiles whose located boundary does not change
+        the grey level that way are not used.
 
     Returns
     -------
@@ -454,17 +459,20 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         return None
     n = int(max(3, min(n_samples, math.floor(length) + 1)))
     t = np.linspace(t0, t1, n)
-    halfwidth = float(halfwidth_px)
+    scale_band = 1.0
     current = line
     result = None
     for _ in range(iterations):
         centres = current.point + t[:, None] * current.direction
+        band = np.broadcast_to(np.asarray(halfwidth_px(t) if callable(halfwidth_px) else halfwidth_px, float),
+                               t.shape)
+        halfwidth = np.maximum(band * scale_band, np.minimum(band, 2.5))
         stripe_reach = np.broadcast_to(np.asarray(
             outward_reach_px(t) if callable(outward_reach_px) else outward_reach_px, float), t.shape)
         profiles, offsets = sample_profiles(image, centres, current.normal, current.direction,
-                                            halfwidth + (float(stripe_reach.max()) if outward else 0.0) + 3.0,
+                                            float(halfwidth.max()) + (float(stripe_reach.max()) if outward else 0.0) + 3.0,
                                             step_px=0.5 if (kind == "edge" and outward) else 1.0)
-        window = np.broadcast_to(np.abs(offsets)[None, :] <= halfwidth, profiles.shape)
+        window = np.abs(offsets)[None, :] <= halfwidth[:, None]
         if kind == "edge" and outward:
             position, strength = boundary_offsets(profiles, offsets, outward, window, stripe_reach)
             contrast = strength / 0.5      # an area-sampled step of height h has slope ~h/2 at its ramp
@@ -483,6 +491,13 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         reach_out = stripe_reach if outward else 0.0
         keep = np.isfinite(position) & (position_out >= -halfwidth) & (position_out <= halfwidth + reach_out) \
             & (contrast >= min_contrast)
+        if kind == "edge" and outward and keep.sum() >= 3:
+            # the region's boundary separates its inside (past a border stripe) from its outside:
+            # a marking's edge inside the region (its grey level against the surface) or a texture
+            # edge outside it does not change the grey level the way the boundary does
+            net = _net_step(profiles, offsets, position, outward, stripe_reach)
+            sign = net_polarity or int(np.sign(np.median(net[keep])) or 1)
+            keep &= net * sign >= 0.3 * np.median(np.abs(net[keep]))
         if keep.sum() >= 3:
             # texture beside the line (grass) is weaker than the line's own edge: drop points
             # much weaker than the line's typical strength
@@ -530,8 +545,28 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         # the next pass samples the same span around the fitted line, in a narrower band
         t = t_profiles
         current = new_line
-        halfwidth = max(2.5, halfwidth / 2.0)
+        scale_band /= 2.0
     return result
+
+
+def _net_step(profiles: np.ndarray, offsets: np.ndarray, position: np.ndarray, outward: int,
+              stripe_reach) -> np.ndarray:
+    """Grey level just outside a located boundary minus inside it past a border stripe."""
+    out_dir = 1.0 if outward >= 0 else -1.0
+    pos = np.nan_to_num(position)[:, None] * out_dir
+    reach = np.broadcast_to(np.asarray(stripe_reach, float), (len(profiles),))[:, None]
+    rel = offsets[None, :] * out_dir - pos
+    outside = (rel >= 1.0) & (rel <= 3.0)
+    inside = (rel <= -reach - 0.5) & (rel >= -reach - 3.0)
+    finite = np.isfinite(profiles)
+
+    def mean(mask):
+        m = mask & finite
+        return np.where(m, profiles, 0.0).sum(axis=1) / np.maximum(m.sum(axis=1), 1)
+
+    net = mean(outside) - mean(inside)
+    ok = ((outside & finite).sum(axis=1) > 0) & ((inside & finite).sum(axis=1) > 0) & np.isfinite(position)
+    return np.where(ok, net, 0.0)
 
 
 def _largest_run(t: np.ndarray, mask: np.ndarray, max_gap: float) -> np.ndarray:

@@ -343,31 +343,39 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], score_ratio: flo
     """Of strips running side by side (one vanishing point, disjoint), put the widest first.
 
     A runway and its parallel taxiway (half as wide), or a road along it, all look like long
-    paved strips; the runway is the widest. Only strips that are convincingly strips count:
-    a score within ``score_ratio`` of the best, an inside that differs from the outside as much
-    as the edges say, and the same ground on both sides.
+    paved strips; the runway is the widest. Wherever a strip stands in the ranking, a wider
+    strip beside it is moved just ahead of it. Only convincing strips count: a score within
+    ``score_ratio`` of the other's, an inside that differs from the outside as much as the
+    edges say and is mostly one surface (its spread within 1.5 times that difference; a
+    runway's markings spread it), the same ground on
+    both sides, and an end in view.
     """
-    if len(hypotheses) < 2:
-        return hypotheses
-    best = hypotheses[0]
-
     def is_strip(h):
         e = h.evidence
         contrast = max(e.get("contrast", 0.0), 1e-6)
-        return (abs(e.get("interior", 0.0)) >= strip_quality * contrast
-                and abs(e.get("outside_gap", math.inf)) <= 0.5 * max(abs(e.get("interior", 0.0)), contrast))
+        interior = abs(e.get("interior", 0.0))
+        return (interior >= strip_quality * contrast
+                and abs(e.get("outside_gap", math.inf)) <= 0.5 * max(interior, contrast)
+                and e.get("spread", math.inf) <= 1.5 * interior    # mostly one surface inside
+                and e.get("ends", 0) >= 1)
 
-    if not is_strip(best):
-        return hypotheses
-    width = best.k_right - best.k_left
-    rivals = [h for h in hypotheses[1:]
-              if abs(h.s0 - best.s0) < 1e-6 and h.score >= score_ratio * best.score and is_strip(h)
-              and (h.k_left >= best.k_right or h.k_right <= best.k_left)        # side by side, not nested
-              and (h.k_right - h.k_left) > 1.3 * width]
-    if not rivals:
-        return hypotheses
-    widest = max(rivals, key=lambda h: h.k_right - h.k_left)
-    return [widest] + [h for h in hypotheses if h is not widest]
+    ordered = []
+    remaining = list(hypotheses)
+    while remaining:
+        h = remaining.pop(0)
+        if is_strip(h):
+            width = h.k_right - h.k_left
+            rivals = [r for r in remaining
+                      if abs(r.s0 - h.s0) < 1e-6 and r.score >= score_ratio * h.score and is_strip(r)
+                      and (r.k_left >= h.k_right or r.k_right <= h.k_left)
+                      and (r.k_right - r.k_left) > 1.3 * width]
+            if rivals:
+                widest = max(rivals, key=lambda r: r.k_right - r.k_left)
+                remaining.remove(widest)
+                remaining.insert(0, h)
+                h = widest
+        ordered.append(h)
+    return ordered
 
 
 def _prefer_enclosing(hypotheses: list[RunwayHypothesis]) -> list[RunwayHypothesis]:
