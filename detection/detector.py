@@ -367,7 +367,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     span = max(hypothesis.d_near - hypothesis.d_far, 4.0)
     extent = surface_extent(ctx.image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
                             (hypothesis.d_far, hypothesis.d_near),
-                            (max(1.0, hypothesis.d_far - 0.5 * span), min(bottom_depth, hypothesis.d_near + 0.5 * span)))
+                            (1.0, bottom_depth))
     d_lo, d_hi = (hypothesis.d_far, hypothesis.d_near) if extent is None else extent
     inset = 0.03 * (d_hi - d_lo)
     for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
@@ -453,16 +453,18 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     # the edges' slopes as lines through the fused vanishing point, at mid depth
     k_l_vp = (s0_l + k_l * d_mid - s0_vp) / d_mid
     k_r_vp = (s0_r + k_r * d_mid - s0_vp) / d_mid
-    extent = surface_extent(ctx.image, horizon, s0_vp, k_l_vp, k_r_vp, (d_far, d_near), (max(1.0, d_far - params.threshold_search_fraction * depth_span),
-                                              min(bottom_depth, d_near + params.threshold_search_fraction * depth_span)))
+    extent = surface_extent(ctx.image, horizon, s0_vp, k_l_vp, k_r_vp, (d_far, d_near), (1.0, bottom_depth))
     d_near_expected, d_far_expected = d_near, d_far
     if extent is not None:
         d_far_expected, d_near_expected = extent
+
+    def window(depth):
+        half = max(8.0, 0.5 * params.threshold_search_fraction * depth_span, 0.1 * depth)
+        return max(0.5, depth - half), min(bottom_depth, depth + half)
+
     near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_near_expected,
-                                (d_near - params.threshold_search_fraction * depth_span,
-                                 d_near + params.threshold_search_fraction * depth_span),
-                                outward=1, min_step=min_step,
-                                marking_reach_px=1.0 * width_slope * d_near * d_near / camera.fx + 2.0)
+                                window(d_near_expected), outward=1, min_step=min_step,
+                                marking_reach_px=1.0 * width_slope * d_near_expected ** 2 / camera.fx + 2.0)
     if near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
     else:
@@ -474,10 +476,8 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         if not corners_found[:2].all():
             notes.append("a threshold corner lies outside the image")
     far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
-                               (max(0.5, d_far - params.threshold_search_fraction * depth_span),
-                                d_far + params.threshold_search_fraction * depth_span),
-                               outward=-1, min_step=min_step,
-                               marking_reach_px=1.0 * width_slope * d_far * d_far / camera.fx + 2.0)
+                               window(d_far_expected), outward=-1, min_step=min_step,
+                               marking_reach_px=1.0 * width_slope * d_far_expected ** 2 / camera.fx + 2.0)
     if far is None:
         notes.append("runway end not found")
     else:

@@ -67,9 +67,11 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     quartile otherwise, so threshold stripes and numbers do not end it early.
     """
     width = k_right - k_left
+    # rows every half pixel near the horizon and at most 800 of them (geometric beyond)
+    n_rows = int(min(800, max(8, (d_window[1] - d_window[0]) / step_d_px + 1)))
     rect = rectify(image, horizon, s0, (k_left - 0.4 * width, k_right + 0.4 * width), d_window,
-                   max_rows=int(max(8, (d_window[1] - d_window[0]) / step_d_px) + 1), max_columns=256,
-                   pixel_step=max(0.5, width * d_window[1] / 120.0))
+                   max_rows=n_rows, max_columns=256, pixel_step=max(0.5, width * d_window[1] / 120.0),
+                   geometric_rows=n_rows == 800)
     if rect is None:
         return None
     f = (rect.k - k_left) / width
