@@ -88,40 +88,59 @@ class ConsistencyResult:
     information: np.ndarray | None = None
 
 
-def _rows(q, y, J, normals):
-    """Least-squares rows (A, rhs) of the linearised pixel residuals; one or two rows per point."""
-    A_rows, rhs = [], []
+def _blocks(q, uv, G_virtual_to_pixels, normals):
+    """Per point, the linearised pixel equations ``A_i (s, b) = r_i``: one or two rows each.
+
+    ``A_i = J_i [q_i | I]`` (rows across the edge only for an edge point: ``n_i^T A_i``) and
+    ``r_i = J_i y_i``, with ``y_i = G^-1(uv_i)`` and ``J_i`` the derivative of ``G`` there.
+    """
+    y = apply_homography(np.linalg.inv(G_virtual_to_pixels), uv)
+    blocks = []
     for k in range(len(q)):
-        Jq = J[k] @ q[k]
-        block = np.column_stack([Jq, J[k]])           # (2, 3): d(pixels)/d(s, b1, b2)
-        target = J[k] @ y[k]
+        J = homography_jacobian(G_virtual_to_pixels, y[k])
+        A = np.column_stack([J @ q[k], J])            # (2, 3): d(pixels)/d(s, b1, b2)
+        r = J @ y[k]
         n = normals[k]
-        if n is None:
-            A_rows.append(block)
-            rhs.append(target)
-        else:
-            A_rows.append(n[None, :] @ block)
-            rhs.append(np.atleast_1d(n @ target))
-    return np.vstack(A_rows), np.concatenate(rhs)
+        if n is not None:
+            A, r = n[None, :] @ A, np.atleast_1d(n @ r)
+        blocks.append((A, r))
+    return blocks
+
+
+def _solve(blocks, keep):
+    """Least squares over the kept blocks: ``(theta, information A^T A)`` or ``(None, None)``."""
+    rows = sum(len(blocks[k][1]) for k in np.nonzero(keep)[0])
+    if rows < 3:
+        return None, None
+    information = np.zeros((3, 3))
+    rhs = np.zeros(3)
+    for k in np.nonzero(keep)[0]:
+        A, r = blocks[k]
+        information += A.T @ A
+        rhs += A.T @ r
+    eigenvalues = np.linalg.eigvalsh(information)
+    if not eigenvalues[0] > 1e-12 * max(eigenvalues[-1], 1e-300):
+        return None, None
+    theta = np.linalg.solve(information, rhs)
+    if not (np.all(np.isfinite(theta)) and theta[0] > 0):
+        return None, None
+    return theta, information
 
 
 def _n_rows(normals, keep) -> int:
     return sum(1 if normals[k] is not None else 2 for k in np.nonzero(keep)[0])
 
 
+def _motion(theta) -> PlaneMotion:
+    return PlaneMotion(scale=float(theta[0]), shift=np.array(theta[1:], dtype=float))
+
+
 def _fit(q, uv, G_virtual_to_pixels, normals, keep):
     """Least squares of the module docstring: (motion, normal matrix A^T A) or (None, None)."""
-    if _n_rows(normals, keep) < 3:
+    theta, information = _solve(_blocks(q, uv, G_virtual_to_pixels, normals), keep)
+    if theta is None:
         return None, None
-    G_inv = np.linalg.inv(G_virtual_to_pixels)
-    index = np.nonzero(keep)[0]
-    y = apply_homography(G_inv, uv[index])
-    J = [homography_jacobian(G_virtual_to_pixels, y[k]) for k in range(len(index))]
-    A, rhs = _rows(q[index], y, J, [normals[k] for k in index])
-    solution, _, rank, singular = np.linalg.lstsq(A, rhs, rcond=None)
-    if rank < 3 or singular[-1] < 1e-9 * singular[0] or not np.all(np.isfinite(solution)) or solution[0] <= 0:
-        return None, None
-    return PlaneMotion(scale=float(solution[0]), shift=solution[1:].copy()), A.T @ A
+    return _motion(theta), information
 
 
 def fit_plane_motion(q, uv, G_virtual_to_pixels, normals=None, keep=None) -> PlaneMotion | None:
@@ -181,11 +200,16 @@ def check_consistency(q, uv, G_virtual_to_pixels, threshold_px: float, normals=N
     motion puts it (leave-one-out: a drifting point would otherwise pull the fit towards
     itself) exceeds ``threshold_px`` plus three times that prediction's standard deviation
     (a small, far-away configuration predicts a point only loosely). The point most beyond
-    its threshold is set aside (the one whose removal leaves the others most consistent) and
-    the test repeated on the rest while a spare equation remains. When no point can be left
-    out (two corner points: four equations for three unknowns) the disagreement is twice the
-    largest in-sample residual (one point displaced by e across the segment leaves e / 2 on
-    each) and, beyond the threshold, ``decided`` is False.
+    its threshold leads to setting aside the point whose removal leaves the others most
+    consistent, and the test is repeated on the rest while a spare equation remains. When
+    no point can be left out (two corner points: four equations for three unknowns) the
+    disagreement is twice the largest in-sample residual (one point displaced by e across
+    the segment leaves e / 2 on each) and, beyond the threshold, ``decided`` is False.
+
+    Leave-one-out needs no refit: with ``N = A^T A`` over the kept points, ``e_i`` point i's
+    residual rows and ``H_i = A_i N^-1 A_i^T``, the residual of i against the fit of the others
+    is ``(I - H_i)^-1 e_i``, that fit is ``theta - N^-1 A_i^T (I - H_i)^-1 e_i``, and its
+    covariance is ``sigma^2 (N - A_i^T A_i)^-1`` (linear least squares, exactly).
     """
     q = np.asarray(q, dtype=float).reshape(-1, 2)
     uv = np.asarray(uv, dtype=float).reshape(-1, 2)
@@ -195,54 +219,66 @@ def check_consistency(q, uv, G_virtual_to_pixels, threshold_px: float, normals=N
         raise ValueError(f"threshold_px must be a non-negative number, got {threshold_px!r}")
     if not (math.isfinite(sigma_px) and sigma_px > 0):
         raise ValueError(f"sigma_px must be a positive number, got {sigma_px!r}")
-    keep = np.ones(n, dtype=bool)
     nan = np.full(n, np.nan)
-    motion, information = _fit(q, uv, G_virtual_to_pixels, normals, keep)
-    if motion is None:
+    blocks = _blocks(q, uv, G_virtual_to_pixels, normals)
+    keep = np.ones(n, dtype=bool)
+    theta, information = _solve(blocks, keep)
+    if theta is None:
         return ConsistencyResult(None, nan, np.zeros(n, dtype=bool), threshold_px, False, False)
     if _n_rows(normals, keep) <= 3:
         # no spare equation: the motion fits exactly, nothing can be checked
+        motion = _motion(theta)
         residual = _residuals(motion, q, uv, G_virtual_to_pixels, normals)
         return ConsistencyResult(motion, residual, np.ones(n, dtype=bool), threshold_px, False, False,
                                  prediction_std_px(motion, information, q, G_virtual_to_pixels, sigma_px),
                                  information)
     decided = True
     while True:
-        worst_excess, any_left_out = -math.inf, False
+        inverse = np.linalg.inv(information)
+        leave_out = {}           # k -> (theta without k, excess of k's residual over its threshold)
         for k in np.nonzero(keep)[0]:
-            others = keep.copy()
-            others[k] = False
-            trial, trial_information = _fit(q, uv, G_virtual_to_pixels, normals, others)
-            if trial is None:
+            A, r = blocks[k]
+            if _n_rows(normals, keep) - len(r) < 3:
                 continue
-            any_left_out = True
-            left_out = float(_residuals(trial, q[k:k + 1], uv[k:k + 1], G_virtual_to_pixels, [normals[k]])[0])
-            spread = float(prediction_std_px(trial, trial_information, q[k:k + 1], G_virtual_to_pixels, sigma_px)[0])
-            worst_excess = max(worst_excess, left_out - (threshold_px + 3.0 * spread))
-        if not any_left_out:
-            residual = _residuals(motion, q, uv, G_virtual_to_pixels, normals)
+            others = information - A.T @ A
+            if not np.linalg.eigvalsh(others)[0] > 1e-12 * np.linalg.eigvalsh(information)[-1]:
+                continue
+            e = r - A @ theta
+            shrink = np.eye(len(r)) - A @ inverse @ A.T
+            e_out = np.linalg.solve(shrink, e)
+            theta_out = theta - inverse @ A.T @ e_out
+            spread = math.sqrt(max(float(np.linalg.eigvalsh(sigma_px ** 2 * A @ np.linalg.inv(others) @ A.T)[-1]),
+                                   0.0))
+            leave_out[k] = (theta_out, float(np.linalg.norm(e_out)) - (threshold_px + 3.0 * spread))
+        if not leave_out:
+            residual = _residuals(_motion(theta), q, uv, G_virtual_to_pixels, normals)
             if 2.0 * float(np.max(residual[keep])) > threshold_px:
                 decided = False
             break
-        if worst_excess <= 0.0:
+        if max(excess for _, excess in leave_out.values()) <= 0.0:
             break
+        # set aside the point whose removal leaves the others most consistent
         best = None
-        for k in np.nonzero(keep)[0]:
-            others = keep.copy()
-            others[k] = False
-            if _n_rows(normals, others) <= 3:
+        for k, (theta_out, _) in leave_out.items():
+            remaining = keep.copy()
+            remaining[k] = False
+            if _n_rows(normals, remaining) <= 3:
                 continue        # the others would fit exactly: nothing left to check them against
-            trial, trial_information = _fit(q, uv, G_virtual_to_pixels, normals, others)
-            if trial is None:
-                continue
-            spread = float(np.max(_residuals(trial, q, uv, G_virtual_to_pixels, normals)[others]))
+            spread = max(float(np.linalg.norm(blocks[j][1] - blocks[j][0] @ theta_out))
+                         for j in np.nonzero(remaining)[0])
             if best is None or spread < best[0]:
-                best = (spread, k, trial, trial_information)
+                best = (spread, k)
         if best is None:
             decided = False
             break
         keep[best[1]] = False
-        motion, information = best[2], best[3]
+        theta, information = _solve(blocks, keep)
+        if theta is None:
+            decided = False
+            keep[best[1]] = True
+            theta, information = _solve(blocks, keep)
+            break
+    motion = _motion(theta)
     residual = _residuals(motion, q, uv, G_virtual_to_pixels, normals)
     std = prediction_std_px(motion, information, q, G_virtual_to_pixels, sigma_px)
     consistent = keep & (residual <= threshold_px + 3.0 * std)

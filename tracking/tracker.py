@@ -5,24 +5,25 @@ A pilot designates points once (the runway corners, or any ground points with te
 
 1. *Prediction*: the last position turned by the camera rotation between the two frames
    (inertial attitude, :func:`visland.tracking.motion.rotation_homography`) plus the last
-   frame's remaining image motion; a point that could not be matched last frame is put
-   where the rigid ground-plane motion of the other points puts it
-   (:mod:`visland.tracking.rigid`).
+   frame's remaining image motion.
 2. *Matching*: normalised cross-correlation of the point's template in a window of
-   ``search_radius_px`` around the prediction, sub-pixel peak
-   (:func:`visland.tracking.template.match_in_window`). The template is the reference
-   cut at the last update, warped by the predicted ground-plane motion when
-   ``scale_adaptation`` is on.
+   ``search_radius_px`` around the prediction, sub-pixel refinement
+   (:func:`visland.tracking.template.match_in_window`). The template is the reference cut at
+   the last update, warped by the predicted ground-plane motion when ``scale_adaptation`` is
+   on (a straight-line fit through the last rigid fits: :data:`MOTION_HISTORY`).
 3. *Loss*: a refused match (low score, two similar peaks, peak on the window border) leaves
-   the point *coasting* on its prediction, not measured; after ``max_coast_frames`` it is
-   *lost*. A lost point is only searched for again around the rigid prediction from the
-   other points, or re-anchored by a detector; never taken from a far-away match.
-4. *Anchoring* (optional): a confident detected corner close to the tracked point replaces
-   it (:mod:`visland.tracking.anchoring`).
-5. *Consistency*: the measured points must follow one ground-plane motion; those that do not
-   are flagged, re-projected or dropped (``on_inconsistent``).
-6. *Template update*: by ``update_policy`` (:mod:`visland.tracking.params`: this makes the
-   drift).
+   the point *coasting*, not measured; after ``max_coast_frames`` it is *lost*. A point is
+   never taken from a match outside its search window.
+4. *Consistency*: the measured points must follow one ground-plane motion
+   (:mod:`visland.tracking.rigid`); those that do not are flagged, re-projected or dropped
+   (``on_inconsistent``). Coasting points are put where that motion places them, and lost
+   points are looked for there (within the consistency threshold only), when it places them
+   precisely.
+5. *Anchoring* (optional): a confident detected corner close to the tracked point pulls it
+   towards the detection (:mod:`visland.tracking.anchoring`); a far one is followed only by
+   an untrusted point, after several agreeing detections.
+6. *Template update*: by ``update_policy`` (:mod:`visland.tracking.params`: this is what
+   makes the drift).
 
 Every frame returns a :class:`TrackStep` with each point's status, position, score and the
 reason for anything unusual. Pixels follow :mod:`visland.camera` (``(0, 0)`` the centre of the

@@ -154,3 +154,20 @@ def test_track_source_takes_any_frame_source(folder, approach):
     assert run.columns["found"][4] == 0 and "decoder error" in run.columns["reason"][4]
     assert all(f == 1 for f in run.columns["found"][5:])
     assert run.analysis_s > 0
+
+
+def test_edge_points_are_tracked_and_written_as_extra_columns(folder, approach, tmp_path, capsys):
+    out = tmp_path / "m.csv"
+    code, stdout, _ = run(["track", str(folder), "--out", str(out), "--edge-points", "1"], capsys)
+    assert code == 0
+    table = read_measurements(out)
+    for side, (near, far) in (("left", (0, 2)), ("right", (1, 3))):
+        u, v = table[f"{side}_edge_1_u_px"], table[f"{side}_edge_1_v_px"]
+        assert np.all(np.isfinite(u))
+        # an edge point stays on its edge: distance to the line through the labelled corners
+        a, b = approach.corners_uv[:, near], approach.corners_uv[:, far]
+        d = b - a
+        across = np.abs((u - a[:, 0]) * d[:, 1] - (v - a[:, 1]) * d[:, 0]) / np.hypot(d[:, 0], d[:, 1])
+        assert np.max(across) < 0.5
+        assert np.all(np.isfinite(table[f"{side}_edge_1_score"][1:]))
+    assert "left_edge_1" in stdout
