@@ -109,7 +109,7 @@ def steps_to_columns(steps, times_s, point_names, anchor_min_confidence: float =
     return columns
 
 
-def parse_designation(text: str, width: int, height: int) -> list:
+def parse_designation(text: str) -> list:
     """Points from a command-line designation ``"u,v;u,v"`` or ``"near_left=u,v;near_right=u,v"``.
 
     Unnamed points take the corner names in order (near_left, near_right, far_left,

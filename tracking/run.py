@@ -138,7 +138,7 @@ def track_source(source, init: str | None = "labels", params: TrackerParams | No
     else:
         if edge_points:
             raise ValueError("--edge-points needs --init labels (it places points between labelled corners)")
-        designation = parse_designation(init, camera.width, camera.height)
+        designation = parse_designation(init)
     provider = _anchor_provider(source, anchor, anchor_every, start)
     if provider is not None and not any(name in CORNER_NAMES for name, _ in designation):
         raise ValueError("anchoring re-anchors runway corners: designate at least one corner by name "

@@ -7,11 +7,12 @@ A reference is cut at whole pixels (no interpolation blur): its centre pixel is 
 point rounded, and ``offset_px`` keeps the sub-pixel remainder, so the point is
 ``centre_px + offset_px``. Matching uses normalised cross-correlation (OpenCV
 ``matchTemplate`` with ``TM_CCOEFF_NORMED``: zero-mean, unit-norm correlation in [-1, 1],
-insensitive to brightness and contrast changes) in a window around a prediction, and refines
-the peak to sub-pixel precision by fitting a parabola through the peak and its two
-neighbours along each axis (three-point Gaussian-free fit; its error is under 0.1 px on the
-smooth correlation peaks of natural images, and biased towards whole pixels, which is one of
-the sources of drift when the template is re-cut every frame).
+insensitive to brightness and contrast changes) in a window around a prediction. The whole-
+pixel peak is refined to sub-pixel precision either by Gauss-Newton on the normalised
+difference (:func:`refine_translation`, the default: a few hundredths of a pixel on smooth
+texture) or by a parabola through the peak and its two neighbours along each axis (cheaper,
+but biased towards whole pixels by up to a few tenths on sharp peaks, which re-cut templates
+then accumulate as drift).
 """
 from __future__ import annotations
 
