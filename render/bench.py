@@ -7,7 +7,9 @@ Figures (seconds per frame, median over the frames, with the 10th and 90th perce
 - ``render+png``: the same plus PNG encoding (zlib level ``--png-compression``) and an atomic
   write to a temporary folder;
 - ``options``: the cost of each quality option, as the change of the median ``render`` time
-  when that option alone is changed from the default (one renderer per variant).
+  when that option alone is changed from the default (one renderer per variant);
+- CPU seconds per frame (all threads of the process, llvmpipe's included), which depend far
+  less than wall time on what else runs on the machine.
 
 The machine is often shared: the load average before and after is printed with the figures.
 The last line is one JSON object holding them.
@@ -27,7 +29,7 @@ __all__ = ["run_render_bench", "approach_poses", "VARIANTS"]
 
 #: Quality options timed against the default, (label, SceneParams overrides).
 VARIANTS = (
-    ("msaa 0 (no anti-aliasing)", {"msaa_samples": 0}),
+    ("msaa 4", {"msaa_samples": 4}),
     ("msaa 2", {"msaa_samples": 2}),
     ("anisotropic taps 1 (off)", {"anisotropy": 1.0}),
     ("anisotropic taps 16", {"anisotropy": 16.0}),
@@ -70,19 +72,21 @@ def _time_renders(params, camera, runway, poses, warmup=1, png_level=None, folde
         setup = time.perf_counter() - t0
         for p, R in poses[:warmup]:
             renderer.render(p, R, frame_seed=0)
-        render_times, write_times, sizes = [], [], []
+        render_times, write_times, sizes, cpu_times = [], [], [], []
         for k, (p, R) in enumerate(poses):
             t = time.perf_counter()
+            c = time.process_time()
             rgb = renderer.render(p, R, frame_seed=k)
             t_render = time.perf_counter() - t
             render_times.append(t_render)
+            cpu_times.append(time.process_time() - c)
             if png_level is not None:
                 ok, data = cv2.imencode(".png", np.ascontiguousarray(rgb[..., ::-1]),
                                         [cv2.IMWRITE_PNG_COMPRESSION, png_level])
                 atomic_write_bytes(Path(folder) / f"{k:06d}.png", data.tobytes())
                 write_times.append(time.perf_counter() - t)
                 sizes.append(len(data))
-    return setup, render_times, write_times, sizes
+    return setup, render_times, write_times, sizes, cpu_times
 
 
 def run_render_bench(size: int = 2048, n_frames: int = 9, png_compression: int = 1, variants: bool = True,
@@ -95,17 +99,19 @@ def run_render_bench(size: int = 2048, n_frames: int = 9, png_compression: int =
     out(f"visland bench render: {size}x{size}, {len(poses)} frames of thesis-1 from the start to 100 ft, "
         f"load average {load_before[0]:.2f} (1 min) before")
     with tempfile.TemporaryDirectory(prefix="visland-bench-") as folder:
-        setup, render_times, write_times, sizes = _time_renders(default, camera, runway, poses,
-                                                                png_level=png_compression, folder=folder)
+        setup, render_times, write_times, sizes, cpu_times = _time_renders(default, camera, runway, poses,
+                                                                           png_level=png_compression, folder=folder)
         figures = {
             "size_px": size, "frames": len(poses), "setup_s": setup,
             "render": _percentiles(render_times),
+            "render_cpu_median_s": float(np.median(cpu_times)),
             "render_png": _percentiles(write_times),
             "png_compression": png_compression, "png_mean_bytes": float(np.mean(sizes)),
         }
         out(f"  scene setup (textures, GL context): {setup:.2f} s")
         out(f"  render (draw + readback + noise): median {figures['render']['median_s']:.3f} s/frame "
-            f"[p10 {figures['render']['p10_s']:.3f}, p90 {figures['render']['p90_s']:.3f}]")
+            f"[p10 {figures['render']['p10_s']:.3f}, p90 {figures['render']['p90_s']:.3f}], "
+            f"CPU (all threads) {figures['render_cpu_median_s']:.3f} s/frame")
         out(f"  render + PNG level {png_compression} + write: median {figures['render_png']['median_s']:.3f} s/frame "
             f"[p10 {figures['render_png']['p10_s']:.3f}, p90 {figures['render_png']['p90_s']:.3f}], "
             f"{figures['png_mean_bytes'] / 1e6:.2f} MB/frame")
@@ -132,10 +138,13 @@ def run_render_bench(size: int = 2048, n_frames: int = 9, png_compression: int =
         out("  quality options (median render time, change from the default):")
         for label, overrides in VARIANTS:
             params = replace(default, **overrides)
-            _, times, _, _ = _time_renders(params, camera, runway, poses)
+            _, times, _, _, cpus = _time_renders(params, camera, runway, poses)
             median = float(np.median(times))
-            options[label] = {"median_s": median, "delta_s": median - base}
-            out(f"    {label:28s} {median:.3f} s  ({median - base:+.3f} s)")
+            cpu = float(np.median(cpus))
+            options[label] = {"median_s": median, "delta_s": median - base, "cpu_median_s": cpu,
+                              "cpu_delta_s": cpu - figures["render_cpu_median_s"]}
+            out(f"    {label:28s} {median:.3f} s  ({median - base:+.3f} s)   CPU {cpu:.3f} s "
+                f"({cpu - figures['render_cpu_median_s']:+.3f} s)")
     figures["options"] = options
     figures["load_average_before"] = load_before[0]
     figures["load_average_after"] = os.getloadavg()[0]
