@@ -124,3 +124,26 @@ def test_prediction_spread_matches_monte_carlo():
                         for _ in range(2000)])
     monte_carlo = math.sqrt(np.linalg.eigvalsh(np.cov(samples.T))[-1])
     assert abs(predicted_std - monte_carlo) < 0.05 * monte_carlo
+
+
+def test_closed_form_leave_one_out_equals_refitting_without_the_point():
+    """(I - H_i)^-1 e_i, the residual of point i against the others' fit, checked by refitting."""
+    from visland.tracking.rigid import _blocks, _solve
+    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-1200.0, 20.0, -70.0])
+    uv0, uvk = view(c0, 0.0, 1.0, 3.0), view(ck, 1.0, 2.0, 1.0)
+    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
+    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
+    q = q[:, :2] / q[:, 2:3]
+    noisy = uvk + np.random.default_rng(4).normal(0.0, 0.7, uvk.shape)
+    normals = [None] * 4 + [np.array([0.6, 0.8]), None]
+    blocks = _blocks(q, noisy, Gk, normals)
+    keep = np.ones(len(q), dtype=bool)
+    theta, information = _solve(blocks, keep)
+    inverse = np.linalg.inv(information)
+    for i in range(len(q)):
+        A, r = blocks[i]
+        closed = np.linalg.solve(np.eye(len(r)) - A @ inverse @ A.T, r - A @ theta)
+        others = keep.copy()
+        others[i] = False
+        theta_out, _ = _solve(blocks, others)
+        np.testing.assert_allclose(closed, r - A @ theta_out, rtol=1e-9, atol=1e-9)
