@@ -366,8 +366,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     # ends, texture lined up with an edge would turn the fit)
     span = max(hypothesis.d_near - hypothesis.d_far, 4.0)
     extent = surface_extent(ctx.image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
-                            (hypothesis.d_far, hypothesis.d_near),
-                            (1.0, bottom_depth))
+                            (hypothesis.d_far, hypothesis.d_near), (1.0, bottom_depth), marking_fraction=0.0)
     d_lo, d_hi = (hypothesis.d_far, hypothesis.d_near) if extent is None else extent
     inset = 0.03 * (d_hi - d_lo)
     for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
@@ -446,8 +445,6 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     width, height = camera.width, camera.height
     edges_reach_border = d_near >= bottom_depth - 3.0
     min_step = params.min_contrast
-    # threshold stripes and the strip before them span about a runway width along the runway
-    # (ICAO: 36 m on a 45 m runway): in depth, width_px * d / fx at depth d
     width_slope = abs(k_r - k_l)
     # where the runway's surface ends (more reliable than where its edges fade)
     # the edges' slopes as lines through the fused vanishing point, at mid depth
@@ -463,8 +460,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         return max(0.5, depth - half), min(bottom_depth, depth + half)
 
     near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_near_expected,
-                                window(d_near_expected), outward=1, min_step=min_step,
-                                marking_reach_px=1.0 * width_slope * d_near_expected ** 2 / camera.fx + 2.0)
+                                window(d_near_expected), outward=1, min_step=min_step)
     if near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
     else:
@@ -476,8 +472,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         if not corners_found[:2].all():
             notes.append("a threshold corner lies outside the image")
     far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
-                               window(d_far_expected), outward=-1, min_step=min_step,
-                               marking_reach_px=1.0 * width_slope * d_far_expected ** 2 / camera.fx + 2.0)
+                               window(d_far_expected), outward=-1, min_step=min_step)
     if far is None:
         notes.append("runway end not found")
     else:

@@ -56,7 +56,8 @@ class TransverseLine:
 
 
 def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_right: float,
-                   d_support: tuple, d_window: tuple, step_d_px: float = 0.5) -> tuple[float, float] | None:
+                   d_support: tuple, d_window: tuple, step_d_px: float = 0.5,
+                   marking_fraction: float = 1.2) -> tuple[float, float] | None:
     """Depths ``(d_far, d_near)`` where the runway's surface ends, from rows of the frame
     resampled on lines through the vanishing point.
 
@@ -64,7 +65,11 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     beside them as it does in the middle of the edges' support (``d_support``). Markings are
     bright on a dark runway (dark on a bright one): the surface is read as the lower quartile
     of the row between the edges when the runway is darker than its surroundings, the upper
-    quartile otherwise, so threshold stripes and numbers do not end it early.
+    quartile otherwise, so threshold stripes and numbers do not end it early. Far away the
+    threshold stripes blend into a band brighter (darker) than the ground across the whole
+    width; such rows still belong to the runway up to ``marking_fraction`` runway widths
+    along it (ICAO threshold stripes and the strip before them: 36 m on a 45 m runway), in
+    depth ``marking_fraction * width_px * d / fx``.
     """
     width = k_right - k_left
     # rows every half pixel near the horizon and at most 800 of them (geometric beyond)
@@ -103,6 +108,20 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     hi = centre
     while hi < len(runway) - 1 and runway[hi + 1]:
         hi += 1
+    # then across a band of blended markings (grey level on the other side of the ground's)
+    median = row_quantile(rect.values[:, inside], 0.5)
+    band = np.nan_to_num((median - out_level) * -np.sign(reference)) > 0.5 * abs(reference)
+    fx = horizon.camera.fx
+
+    def reach(depth):
+        return marking_fraction * width * depth * depth / fx + 1.0
+
+    start = rect.d[hi]
+    while hi < len(runway) - 1 and band[hi + 1] and rect.d[hi + 1] - start <= reach(start):
+        hi += 1
+    start = rect.d[lo]
+    while lo > 0 and band[lo - 1] and start - rect.d[lo - 1] <= reach(start):
+        lo -= 1
     return float(rect.d[lo]), float(rect.d[hi])
 
 
@@ -114,15 +133,14 @@ def _meet(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:
 
 def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                          d_expected: float, d_window: tuple, outward: int, min_step: float,
-                         marking_reach_px: float = 2.0, n_columns: int = 48, step_d_px: float = 0.5,
+                         n_columns: int = 48, step_d_px: float = 0.5,
                          min_significance: float = 2.5) -> TransverseLine | None:
     """Locate the threshold (``outward = +1``: outside is at larger depth) or the runway end
     (``outward = -1``) near depth ``d_expected`` within ``d_window = (d_min, d_max)``.
 
-    The step nearest ``d_expected`` (weighted by its strength) is taken, then, while a step
-    of the opposite sign follows outwards within ``marking_reach_px`` (pixels of depth), the
-    boundary moves out to it: the threshold stripes are a bright band that ends 6 m before
-    the threshold, and the runway's boundary is the last step before the outside.
+    ``d_expected`` is where the runway's surface ends (:func:`surface_extent`): the boundary is
+    the outermost clear step from a pixel inside it to a couple of pixels beyond it (else the
+    step nearest to it, weighted by its strength).
 
     Returns None when no step stands out of the profile's noise by ``min_significance`` or
     reaches a quarter of ``min_step`` grey levels per pixel.
@@ -187,22 +205,18 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
                        & (magnitude[1:-1] >= min_step * 0.25))[0] + 1
     if len(peaks) == 0:
         return None
-    # the step nearest where the edges end, weighted by its strength ...
-    sigma_d = max(2.0, 0.04 * d_expected)
-    score = magnitude[peaks] * np.exp(-0.5 * ((depths[peaks] - d_expected) / sigma_d) ** 2)
-    chosen = int(peaks[np.argmax(score)])
-    # ... then outwards through painted bands (threshold stripes, the strip before them):
-    # while a step of the opposite sign follows within reach, the boundary lies further out
-    reach = max(2, int(round(marking_reach_px / step_d_px)))
-    for _ in range(3):
-        sign = np.sign(g[chosen])
-        ahead = np.arange(chosen + 2 * outward, chosen + outward * (reach + 1), outward)
-        ahead = ahead[(ahead > 0) & (ahead < len(g) - 1)]
-        candidates = [i for i in ahead if i in set(peaks.tolist()) and np.sign(g[i]) == -sign
-                      and magnitude[i] >= 0.25 * magnitude[chosen]]
-        if not candidates:
-            break
-        chosen = int(candidates[0] if len(candidates) == 1 else max(candidates, key=lambda i: magnitude[i]))
+    # the runway's surface ends at ``d_expected`` (last row of runway, markings included): its
+    # boundary is the outermost clear step from just inside that row to a little beyond it;
+    # failing one there, the step nearest to it weighted by its strength
+    inner = max(1.5, 0.01 * d_expected)
+    outer = max(2.5, 0.02 * d_expected)
+    beyond = (depths[peaks] - d_expected) * outward
+    near = peaks[(beyond >= -inner) & (beyond <= outer) & (magnitude[peaks] >= 0.25 * magnitude[peaks].max())]
+    if len(near):
+        chosen = int(near.max() if outward > 0 else near.min())
+    else:
+        score = magnitude[peaks] * np.exp(-0.5 * ((depths[peaks] - d_expected) / (2.0 * inner)) ** 2)
+        chosen = int(peaks[np.argmax(score)])
     # sub-pixel: centroid of the step's derivative lobe within a pixel of its peak
     half = max(1, int(round(1.0 / step_d_px)))
     idx = np.arange(max(0, chosen - half), min(len(g), chosen + half + 1))
