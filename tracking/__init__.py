@@ -28,12 +28,31 @@ Modules (each one idea):
 - :mod:`~visland.tracking.synthetic`: flat textured world through a homography (tests, speed bench).
 - :mod:`~visland.tracking.bench`: ``visland bench track``.
 """
-from visland.tracking.anchoring import AnchorObservation
-from visland.tracking.motion import Attitude
-from visland.tracking.params import INCONSISTENT_ACTIONS, UPDATE_POLICIES, TrackerParams
-from visland.tracking.run import TrackRun, track_source
-from visland.tracking.tracker import MEASURED_STATUSES, POINT_STATUSES, PointReport, PointTracker, TrackStep
+from __future__ import annotations
 
-__all__ = ["PointTracker", "TrackerParams", "TrackStep", "PointReport", "Attitude", "AnchorObservation",
-           "track_source", "TrackRun",
-           "UPDATE_POLICIES", "INCONSISTENT_ACTIONS", "POINT_STATUSES", "MEASURED_STATUSES"]
+import importlib
+
+# Exports are loaded on first use (PEP 562), so that ``visland.tracking.cli`` (imported by the
+# ``visland`` command for every subcommand) does not pull in OpenCV.
+_EXPORTS = {
+    "PointTracker": "visland.tracking.tracker", "TrackStep": "visland.tracking.tracker",
+    "PointReport": "visland.tracking.tracker", "MEASURED_STATUSES": "visland.tracking.tracker",
+    "POINT_STATUSES": "visland.tracking.tracker",
+    "TrackerParams": "visland.tracking.params", "UPDATE_POLICIES": "visland.tracking.params",
+    "INCONSISTENT_ACTIONS": "visland.tracking.params",
+    "Attitude": "visland.tracking.motion",
+    "AnchorObservation": "visland.tracking.anchoring",
+    "track_source": "visland.tracking.run", "TrackRun": "visland.tracking.run",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'visland.tracking' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

@@ -171,3 +171,12 @@ def test_edge_points_are_tracked_and_written_as_extra_columns(folder, approach, 
         assert np.max(across) < 0.5
         assert np.all(np.isfinite(table[f"{side}_edge_1_score"][1:]))
     assert "left_edge_1" in stdout
+
+
+def test_the_command_registration_stays_light():
+    """Importing the stage's CLI module (done for every visland command) must not load OpenCV."""
+    import subprocess
+    import sys
+    code = "import sys, visland.tracking.cli; print('cv2' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"
