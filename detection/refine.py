@@ -308,6 +308,19 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
     chosen = np.where(has_outer, p2, p1)
     lobe_sign = np.where(has_outer, -sign1, sign1)
     strength = np.where(has_outer, opposite[rows, p2], best)
+    # a second step of the same sign just outside the chosen one is the sharper geometric edge
+    # of the region, the chosen one a blur of its texture inside it (a rendered runway's side
+    # stripe, filtered at a grazing angle, spreads inwards from the polygon's edge)
+    beyond2 = (columns - chosen[:, None]) * out_dir
+    zone2 = (beyond2 >= 2) & (beyond2 <= reach + 1) & finite
+    same = np.where(zone2, lobe_sign[:, None] * g0, -np.inf)
+    local2 = np.zeros(zone2.shape, dtype=bool)
+    local2[:, 1:-1] = (same[:, 1:-1] >= same[:, :-2]) & (same[:, 1:-1] >= same[:, 2:])
+    same = np.where(local2 & (same >= 0.6 * strength[:, None]), same, -np.inf)
+    outermost = np.where(np.isfinite(same), columns * out_dir, -np.inf).argmax(axis=1)
+    has_same = np.isfinite(same[rows, outermost])
+    chosen = np.where(has_same, outermost, chosen)
+    strength = np.where(has_same, same[rows, outermost], strength)
     # centroid of a lobe within half a pixel of its peak (narrow: a rendered runway's texture is
     # blurred inside its sharp polygon edge, a ramp that must not pull the boundary inwards)
     half = max(1, int(round(centroid_halfwidth_px / step)))
