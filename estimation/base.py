@@ -22,7 +22,8 @@ its model and says so (``Estimate.coasting``).
 Bad input (SPEC "Bad input"): a programming error raises one ``ValueError`` naming the field
 (wrong shape, non-increasing time, a non-finite inertial input, a non-positive height guess);
 a missing or non-finite *measurement* is a coasting step with a reason; a state that turns
-non-finite is rolled back and the step is flagged, so no NaN ever reaches the output.
+non-finite or absurdly large (beyond :data:`STATE_LIMIT`), or a step whose arithmetic
+overflows, is rolled back and the step is flagged, so no NaN ever reaches the output.
 """
 from __future__ import annotations
 
@@ -56,6 +57,10 @@ FEATURE_SETS = ("points", "lines")
 #: the correction is still large (the thesis's observers assume dH > 0, hypothesis 1.3.1).
 ETA_MIN = 1.0 / 20000.0
 ETA_MAX = 1.0 / 0.5
+
+#: A state component beyond this magnitude is a diverged state (image coordinates, lines and
+#: eta are all of order 1 to 1e3): the step is rolled back like a non-finite one.
+STATE_LIMIT = 1e9
 
 
 def clip_eta(eta: float) -> float:
@@ -334,12 +339,17 @@ class Observer(abc.ABC):
             raise ValueError(f"{self.name}: time must increase: t = {inp.t_s:g} s after t = {self._t_s:g} s")
         measurement, reason = observer_measurement(inp, self.features)
         backup = self._get_state()
-        estimate = self._step(inp, dt, measurement)
-        if measurement is None:
+        try:
+            estimate = self._step(inp, dt, measurement)
+        except (OverflowError, ZeroDivisionError, FloatingPointError):
+            estimate = None              # arithmetic blew up on a bad measurement: same as diverging
+        if estimate is not None and measurement is None:
             estimate.coasting = True
             estimate.reason = estimate.reason or reason
-        if not (math.isfinite(estimate.dh_m) and estimate.dh_m > 0 and math.isfinite(estimate.observability)
-                and np.isfinite(estimate.state).all()):
+        if estimate is None or not (math.isfinite(estimate.dh_m) and estimate.dh_m > 0
+                                    and math.isfinite(estimate.observability)
+                                    and np.isfinite(estimate.state).all()
+                                    and np.abs(estimate.state).max() < STATE_LIMIT):
             self._set_state(backup)
             estimate = self._rolled_back(inp, backup)
         self._t_s = float(inp.t_s)
