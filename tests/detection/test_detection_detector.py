@@ -1,0 +1,86 @@
+"""detect_runway on frames drawn by an independent method (ray casting a painted airport,
+``raycast_airport``), against exact labels from the camera model and the flown trajectory."""
+import math
+
+import numpy as np
+import pytest
+
+from detection_frames import edge_error_px, frame
+from visland.contracts import MEASUREMENT_COLUMNS, read_measurements, write_csv
+from visland.detection import DetectorParams, detect_runway
+
+SIZE = 768
+CASES = [
+    # scenario, metres before the threshold, bright concrete runway (else dark asphalt)
+    ("thesis-1", 1500.0, False),
+    ("thesis-1", 350.0, False),
+    ("thesis-7", 1200.0, False),     # heading 15 deg off the runway, turning back
+    ("thesis-4", 1500.0, True),      # 400 m beside the centre line at the start
+    ("thesis-8", 600.0, True),
+]
+
+
+@pytest.mark.parametrize("name, distance, concrete", CASES)
+def test_edges_corners_and_heading_match_the_labels(name, distance, concrete):
+    image, camera, state, labels = frame(name, distance, size=SIZE, concrete=concrete)
+    result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    assert result.found, result.reason
+    assert result.mode == "acquisition"
+    for side in ("left", "right"):
+        assert edge_error_px(camera, labels, result, side) < 1.0
+    near = np.linalg.norm(result.corners_uv[:2] - labels.corners_uv[0, :2], axis=1)
+    assert result.corners_found[:2].all() and near.max() < 2.5
+    assert abs(math.degrees(result.dpsi_rad - state.dpsi_rad[0])) < 0.1
+    assert abs(result.dF_px - labels.dF_px[0]) < 2.0
+    assert 0.0 < result.confidence <= 1.0
+
+
+def test_tracking_from_the_previous_frame():
+    image0, camera, state0, _ = frame("thesis-1", 800.0, size=SIZE)
+    image1, _, state1, labels1 = frame("thesis-1", 800.0, frame_offset=1, size=SIZE)
+    first = detect_runway(image0, camera, float(state0.roll_rad[0]), float(state0.pitch_rad[0]))
+    second = detect_runway(image1, camera, float(state1.roll_rad[0]), float(state1.pitch_rad[0]), previous=first)
+    assert second.found and second.mode == "tracking"
+    assert second.roi != (0, 0, camera.width, camera.height)
+    for side in ("left", "right"):
+        assert edge_error_px(camera, labels1, second, side) < 1.0
+
+
+def test_the_same_detector_serves_every_image_size():
+    """Parameters are given for 2048 px frames and rescaled: a 512 px frame works with defaults."""
+    image, camera, state, labels = frame("thesis-8", 600.0, size=512, concrete=True)
+    result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]),
+                           params=DetectorParams())
+    assert result.found, result.reason
+    for side in ("left", "right"):
+        assert edge_error_px(camera, labels, result, side) < 1.0
+
+
+def test_centre_line_lies_midway():
+    image, camera, state, labels = frame("thesis-1", 350.0, size=SIZE)
+    result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    assert result.found and result.lines_found["center"]
+    rho, theta = result.lines["center"]
+    true_rho, true_theta = labels.lines["center"][0][0], labels.lines["center"][1][0]
+    assert abs(theta - true_theta) < math.radians(0.5)
+    # the labelled centre line's points (midpoints of the corner pairs) lie on the detected one
+    for a, b in ((0, 1), (2, 3)):
+        midpoint = 0.5 * (labels.corners_uv[0, a] + labels.corners_uv[0, b])
+        if camera.in_image(midpoint):
+            assert abs(camera.line_distance_px(rho, theta, midpoint)) < 1.5
+    assert true_rho == pytest.approx(true_rho)
+
+
+def test_measurement_row_round_trips_through_the_contract(tmp_path):
+    image, camera, state, _ = frame("thesis-8", 600.0, size=SIZE, concrete=True)
+    found = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    missing = detect_runway(np.zeros_like(image), camera, 0.0, 0.04)
+    rows = [found.to_measurement_row(frame=0, t_s=0.0), missing.to_measurement_row(frame=1, t_s=0.04)]
+    assert list(rows[0]) == list(MEASUREMENT_COLUMNS)
+    path = tmp_path / "measurements.csv"
+    write_csv(path, {c: [r[c] for r in rows] for c in MEASUREMENT_COLUMNS}, MEASUREMENT_COLUMNS)
+    table = read_measurements(path)
+    assert list(table["found"]) == [1.0, 0.0]
+    assert table["source"][0] == "detection"
+    assert table["near_left_u_px"][0] == pytest.approx(found.corners_uv[0, 0], abs=1e-6)
+    assert math.isnan(table["near_left_u_px"][1]) and table["reason"][1] == missing.reason
