@@ -71,6 +71,7 @@ class CampaignOptions:
     scheduler: str | None = None
     scene: dict = field(default_factory=dict)
     prune_frames: bool = False
+    png_compression: int = 1
 
     def settings(self) -> dict:
         """What must match for a campaign folder to be resumed (not workers nor scheduler)."""
@@ -169,7 +170,8 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
                 echo(f"[{time.perf_counter() - started:6.0f} s] {scenario.name}: every run up to date, kept")
                 continue
             sim_options = simulation_options_from_args(_Args, camera=CameraModel.default(options.size))
-            job = GenerateJob(scenario=scenario, options=sim_options, scene=scene)
+            job = GenerateJob(scenario=scenario, options=sim_options, scene=scene,
+                              png_compression=options.png_compression)
             echo(f"[{time.perf_counter() - started:6.0f} s] generate {scenario.name} ({options.size} px, "
                  f"{options.fps:g} Hz)")
             report = generate_dataset(job, dataset, workers=options.workers, scheduler=options.scheduler, force=False)
