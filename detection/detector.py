@@ -268,7 +268,7 @@ def _image_span(line: PixelLine, width: int, height: int, margin: float = 1.0) -
 
 
 def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slope: float,
-                 halfwidth_px: float, band_fraction: float = 0.1) -> LineFit | None:
+                 halfwidth_px: float, band_fraction: float = 0.1, iterations: int | None = None) -> LineFit | None:
     """Sub-pixel edge along the pencil line (s0, k) between depths ``d_far`` and ``d_near``.
 
     ``outward_s`` is the side (in s) of the runway's outside; ``width_slope`` the runway's width
@@ -303,7 +303,7 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
 
     return refine_line(ctx.image, line, (t_lo, t_hi), "edge", polarity=0,
                        halfwidth_px=band, n_samples=params.refine_samples,
-                       iterations=params.refine_iterations, min_contrast=params.min_contrast,
+                       iterations=iterations or params.refine_iterations, min_contrast=params.min_contrast,
                        outward=outward_s * sign, outward_reach_px=reach)
 
 
@@ -366,12 +366,14 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     # ends, texture lined up with an edge would turn the fit)
     span = max(hypothesis.d_near - hypothesis.d_far, 4.0)
     extent = surface_extent(ctx.image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
-                            (hypothesis.d_far, hypothesis.d_near), (1.0, bottom_depth), marking_fraction=0.0)
+                            (hypothesis.d_far, hypothesis.d_near), (1.0, bottom_depth), marking_fraction=0.0,
+                            max_rows=300)
     d_lo, d_hi = (hypothesis.d_far, hypothesis.d_near) if extent is None else extent
     inset = 0.03 * (d_hi - d_lo)
     for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
         fit = _refine_edge(ctx, hypothesis.s0, k, d_lo + inset, d_hi - inset, outward, width_slope, halfwidth,
-                           band_fraction=0.1 if prediction is None else 0.25)
+                           band_fraction=0.1 if prediction is None else 0.25,
+                           iterations=None if prediction is None else max(1, params.refine_iterations - 1))
         if fit is None:
             return None, f"{name} edge: no consistent grey-level step along the candidate line"
         length = fit.extent[1] - fit.extent[0]
@@ -531,7 +533,7 @@ def _refine_centre(ctx: _Context, s0, k_c, k_l, k_r, d_far, d_near, polarity_hin
     best = None
     for polarity in ((polarity_hint,) if polarity_hint else (1, -1)):
         fit = refine_line(ctx.image, line, (t_lo, t_hi), "stripe", polarity=polarity, halfwidth_px=halfwidth,
-                          n_samples=params.refine_samples, iterations=params.refine_iterations,
+                          n_samples=params.refine_samples, iterations=max(1, params.refine_iterations - 1),
                           min_contrast=params.min_contrast, stripe_width_px=stripe_width)
         if fit is None or fit.residual_px > params.max_line_residual_px:
             continue
@@ -539,6 +541,8 @@ def _refine_centre(ctx: _Context, s0, k_c, k_l, k_r, d_far, d_near, polarity_hin
             continue
         if best is None or fit.n_inliers > best.n_inliers:
             best = fit
+        if best is not None and best.support >= 0.5:
+            break            # a painted line is white: the dark try only if the bright one fails
     return best
 
 

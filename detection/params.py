@@ -112,7 +112,7 @@ class DetectorParams:
     min_length_to_width: float = 8.0
     min_edge_length_px: float = 24.0
     search_halfwidth_px: float = 6.0
-    refine_samples: int = 200
+    refine_samples: int = 96
     refine_iterations: int = 3
     min_edge_support: float = 0.45
     max_line_residual_px: float = 1.5

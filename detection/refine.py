@@ -121,13 +121,14 @@ def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: fl
     offsets : ndarray (m,)
         Position of each profile sample along the normal (pixels).
     """
-    centres = np.asarray(centres_uv, np.float64)
+    centres = np.asarray(centres_uv, np.float32)
     m = int(math.floor(halfwidth_px / step_px))
     offsets = np.arange(-m, m + 1) * step_px
-    normal = np.broadcast_to(np.asarray(normal_uv, np.float64), centres.shape)
-    direction = np.broadcast_to(np.asarray(direction_uv, np.float64), centres.shape)
-    taps = np.array([-taps_px, 0.0, taps_px])
-    grid = (centres[:, None, None, :] + offsets[None, None, :, None] * normal[:, None, None, :]
+    normal = np.broadcast_to(np.asarray(normal_uv, np.float32), centres.shape)
+    direction = np.broadcast_to(np.asarray(direction_uv, np.float32), centres.shape)
+    taps = np.array([-taps_px, 0.0, taps_px], np.float32)
+    off32 = offsets.astype(np.float32)
+    grid = (centres[:, None, None, :] + off32[None, None, :, None] * normal[:, None, None, :]
             + taps[None, :, None, None] * direction[:, None, None, :])        # (n, 3, m, 2)
     n = len(centres)
     map_u = grid[..., 0].reshape(n * 3, -1)
@@ -533,10 +534,11 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         run = _largest_run(t_all, inliers, max(8.0, 0.15 * length))
         if run.sum() < 3:
             return None
-        fitted = fit_line(np.where(run[:, None], points, np.nan), np.where(run, weights, 0.0))
-        if fitted is None:
-            return None
-        new_line, inliers, sigma = fitted
+        if run.sum() < inliers.sum():
+            fitted = fit_line(np.where(run[:, None], points, np.nan), np.where(run, weights, 0.0))
+            if fitted is None:
+                return None
+            new_line, inliers, sigma = fitted
         # keep the direction of travel of the prediction
         if new_line.direction @ current.direction < 0:
             new_line = PixelLine(new_line.point, -new_line.direction)

@@ -57,7 +57,7 @@ class TransverseLine:
 
 def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_right: float,
                    d_support: tuple, d_window: tuple, step_d_px: float = 0.5,
-                   marking_fraction: float = 1.2) -> tuple[float, float] | None:
+                   marking_fraction: float = 1.2, max_rows: int = 800) -> tuple[float, float] | None:
     """Depths ``(d_far, d_near)`` where the runway's surface ends, from rows of the frame
     resampled on lines through the vanishing point.
 
@@ -72,11 +72,11 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     depth ``marking_fraction * width_px * d / fx``.
     """
     width = k_right - k_left
-    # rows every half pixel near the horizon and at most 800 of them (geometric beyond)
-    n_rows = int(min(800, max(8, (d_window[1] - d_window[0]) / step_d_px + 1)))
+    # rows every half pixel near the horizon and at most max_rows of them (geometric beyond)
+    n_rows = int(min(max_rows, max(8, (d_window[1] - d_window[0]) / step_d_px + 1)))
     rect = rectify(image, horizon, s0, (k_left - 0.4 * width, k_right + 0.4 * width), d_window,
-                   max_rows=n_rows, max_columns=256, pixel_step=max(0.5, width * d_window[1] / 120.0),
-                   geometric_rows=n_rows == 800)
+                   max_rows=n_rows, max_columns=96, pixel_step=max(0.5, width * d_window[1] / 50.0),
+                   geometric_rows=n_rows == max_rows)
     if rect is None:
         return None
     f = (rect.k - k_left) / width
