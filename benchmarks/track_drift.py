@@ -124,6 +124,7 @@ def run_scenario(task: dict) -> dict:
     step_s = {t: 0.0 for t in names}
     detector_s, detector_found, detector_error = 0.0, 0, []
     detector_corner_error = np.full((n, 4), np.nan)
+    detector_confidence = np.full(n, np.nan)
     detect = None
     if "anchored" in names:
         from visland.detection import detect_runway
@@ -144,6 +145,7 @@ def run_scenario(task: dict) -> dict:
                 detector_s += time.perf_counter() - tic
                 previous = found if found.found else None
                 detection = anchor_from_detection(found)
+                detector_confidence[k] = found.confidence
                 if found.found:
                     detector_found += 1
                     ok = np.asarray(found.corners_found, dtype=bool)
@@ -174,6 +176,7 @@ def run_scenario(task: dict) -> dict:
     extra = {}
     if detect is not None:
         extra["error_detector"] = detector_corner_error
+        extra["confidence_detector"] = detector_confidence
         extra["status_detector"] = np.where(np.isfinite(detector_corner_error), STATUS_CODES["tracked"],
                                             STATUS_CODES["lost"]).astype(np.int8)
     np.savez_compressed(out / f"{name}.npz", t_s=states.t_s[:n], dx_m=dx[:n], dh_m=dh[:n], trackers=np.array(names),

@@ -126,8 +126,9 @@ class TrackerParams:
         is averaged while the tracker's drift stays bounded (a complementary filter: the
         track follows the detections with a lag of about ``1 / anchor_weight`` frames).
     anchor_gate_px : float
-        A detected corner further than this from the tracked point does not re-anchor it:
-        a point tracked consistently keeps its track (no jump to a far-away match) ...
+        A detected corner further than this from the tracked point does not re-anchor it; if
+        that point is tracked consistently, the whole detection is refused (the detector has
+        locked onto something else: no jump to a far-away match) ...
     anchor_confirm_frames : int
         ... and a point that is coasting, lost, refused or inconsistent with the others jumps
         to the detection only after this many consecutive confident detections agree on it

@@ -471,11 +471,13 @@ class PointTracker:
     def _apply_anchor(self, anchor: AnchorObservation, index: int, motion, G_now) -> str:
         """Re-anchor corners on confident detections (after the rigid check of this frame).
 
-        A detection within ``anchor_gate_px`` of the track pulls the point towards it by
-        ``anchor_weight``. A farther one is followed only when the track is not trusted
-        (coasting, lost, refused, or inconsistent with the other points) and only after
-        ``anchor_confirm_frames`` consecutive detections agree; a point tracked consistently
-        keeps its track (a detector can lock onto a taxiway).
+        The detection is refused as a whole when a corner of a point tracked consistently
+        (status tracked after the rigid check) lies beyond ``anchor_gate_px`` of its track: a
+        detector can lock onto a taxiway or a road, and then every corner it gives is wrong.
+        Otherwise a detection within the gate pulls the point towards it by ``anchor_weight``,
+        and a farther one is followed only by an untrusted point (coasting, lost, refused, or
+        inconsistent with the others), after ``anchor_confirm_frames`` consecutive detections
+        agree.
         """
         params = self.params
         if not anchor.found:
@@ -487,6 +489,20 @@ class PointTracker:
                 p.pending_anchor = []
             return f"anchor: not used (confidence {anchor.confidence:.2f} < {params.anchor_min_confidence:.2f})"
         G_inv = np.linalg.inv(G_now) if G_now is not None else None
+        # the detection as a whole must agree with the points tracked consistently: a detector
+        # locked onto another object (a taxiway, a road) is refused for every point
+        disagreeing = []
+        for p in self._points:
+            detected = anchor.corner(p.corner) if p.corner is not None else None
+            if detected is not None and p.status == "tracked":
+                distance = float(np.hypot(*(detected - p.uv)))
+                if distance > params.anchor_gate_px:
+                    disagreeing.append(f"{p.name} {distance:.0f} px")
+        if disagreeing:
+            for p in self._points:
+                p.pending_anchor = []
+            return (f"anchor: refused (detected corners away from consistent tracks: {', '.join(disagreeing)}; "
+                    f"gate {params.anchor_gate_px:g} px)")
         for p in self._points:
             if p.corner is None:
                 continue
@@ -500,11 +516,6 @@ class PointTracker:
                 w = params.anchor_weight
                 self._anchor_point(p, p.uv + w * (detected - p.uv),
                                    f"anchored: detected {distance:.1f} px from the track, weight {w:g}")
-            elif p.status == "tracked":
-                p.pending_anchor = []
-                note = f"detected corner {distance:.0f} px away (gate {params.anchor_gate_px:g} px): kept the track"
-                p.reason = f"{p.reason}; {note}" if p.reason else note
-                continue
             else:
                 # a chain of detections on consecutive frames, each within the gate of the one before
                 pending = list(p.pending_anchor)
