@@ -120,6 +120,7 @@ def run_scenario(task: dict) -> dict:
     R = batch_R_camera_from_runway(states.roll_rad, states.pitch_rad, states.dpsi_rad, camera.mount_rpy_rad)
     trackers = {t: (PointTracker(camera, tracker_setup(t)[0]), tracker_setup(t)[1]) for t in names}
     errors = {t: np.full((n, 4), np.nan) for t in names}
+    positions = {t: np.full((n, 4, 2), np.nan) for t in names}      # full-frame pixels
     status = {t: np.full((n, 4), -1, dtype=np.int8) for t in names}
     step_s = {t: 0.0 for t in names}
     detector_s, detector_found, detector_error = 0.0, 0, []
@@ -169,6 +170,7 @@ def run_scenario(task: dict) -> dict:
                     status[t][k, i] = STATUS_CODES[report.status]
                     if report.measured:
                         errors[t][k, i] = float(np.hypot(*(report.uv - corners[k, i])))
+                        positions[t][k, i] = report.uv + (u0, v0)
             if task["verbose"] and k % 100 == 0:
                 line = "  ".join(f"{t} {np.nanmax(errors[t][k, :2]):.2f}" for t in names)
                 print(f"  {name} frame {k}/{n - 1} (render {render_s / (k + 1):.2f} s/frame): {line}", flush=True)
@@ -181,7 +183,7 @@ def run_scenario(task: dict) -> dict:
                                             STATUS_CODES["lost"]).astype(np.int8)
     np.savez_compressed(out / f"{name}.npz", t_s=states.t_s[:n], dx_m=dx[:n], dh_m=dh[:n], trackers=np.array(names),
                         **{f"error_{t}": errors[t] for t in names}, **{f"status_{t}": status[t] for t in names},
-                        **extra)
+                        **{f"uv_{t}": positions[t] for t in names}, **extra)
     summary = {"scenario": name, "frames": n, "crop": [u0, v0, camera.width, camera.height] if crop else None,
                "render_s_per_frame": render_s / n, "wall_s": time.perf_counter() - started,
                "tracker_ms_per_frame": {t: 1000 * step_s[t] / n for t in names}}
@@ -275,10 +277,11 @@ def plot(out: Path, scenarios, names, path: Path, shown=("every_frame", "pure", 
             for i, style in ((0, "-"), (1, "--")):
                 ax.plot(t, err[:, i], style, color=colours.get(tracker, "black"), lw=0.9,
                         label=f"{tracker} {'P' + chr(39) if i == 0 else 'P' + chr(39) * 2}")
-        for label, k in marks(data).items():
+        for m, (label, k) in enumerate(marks(data).items()):
             if k is not None:
                 ax.axvline(t[k], color="0.6", lw=0.6)
-                ax.text(t[k], 0.98, label, transform=ax.get_xaxis_transform(), fontsize=6, ha="center", va="top")
+                ax.text(t[k], 0.98 - 0.07 * (m % 2), label, transform=ax.get_xaxis_transform(), fontsize=6,
+                        ha="center", va="top")
         ax.set_yscale("log")
         ax.set_ylim(0.03, 300.0)
         ax.set_title(name, fontsize=9)
