@@ -123,7 +123,7 @@ class DetectorParams:
     horizon_sigma_px: float = 4.0
     tracking_sigma_px: float = 12.0
     max_width_change: float = 0.25
-    min_confidence: float = 0.35
+    min_confidence: float = 0.25
     horizon_margin_px: float = 0.0
     reference_side_px: int = 2048
 

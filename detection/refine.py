@@ -264,7 +264,8 @@ def transition_offsets(profiles: np.ndarray, offsets: np.ndarray, window: np.nda
 
 def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, window: np.ndarray,
                      stripe_reach_px, flank_ratio: float = 0.3, centroid_halfwidth_px: float = 0.5,
-                     stripe_shift=(0.45, 1.6, 0.2)) -> tuple[np.ndarray, np.ndarray]:
+                     stripe_shift=(0.2, 1.6, 0.2), outer_flank: bool = True,
+                     flank_bias_px: float = 0.11) -> tuple[np.ndarray, np.ndarray]:
     """Sub-pixel position of a region's boundary in each profile, painted border stripe or not.
 
     Walking outwards (``outward`` = +1: along +offsets), a plain boundary is one step; a
@@ -335,6 +336,15 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
 
     position, total = centroid(chosen, lobe_sign)
     inner, _ = centroid(p1, sign1)
+    if outer_flank:
+        # the lobe's outer flank, extrapolated: where it falls to 60 % and 20 % of the peak, the
+        # edge lies at 2 x60 - x20 (for the lobe of an area-sampled step seen through bilinear
+        # interpolation and a central difference this lands 0.11 px outside, ``flank_bias_px``);
+        # a blurred ramp of texture inside the edge widens the lobe inwards only and does not
+        # move this
+        flank = _outer_crossings(g0 * lobe_sign[:, None], chosen, out_dir, offsets, (0.6, 0.2))
+        extrapolated = 2.0 * flank[0] - flank[1] - flank_bias_px * out_dir
+        position = np.where(np.isfinite(extrapolated), extrapolated, position)
     # a stripe narrower than about two pixels is not resolved: area sampling spreads each of its
     # flanks over a pixel, which puts the outer flank's centroid about half a pixel outside the
     # boundary; the flanks' separation tells (under 1.6 px for stripes up to 1.5 px wide, 2 px
@@ -347,6 +357,34 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
     position = position - np.where(has_outer, shift * out_dir, 0.0)
     valid = np.isfinite(best) & (best > 0) & (total > 0) & (chosen >= half) & (chosen < m - half)
     return np.where(valid, position, np.nan), np.where(valid, strength, 0.0)
+
+
+def _outer_crossings(signed: np.ndarray, peak: np.ndarray, out_dir: int, offsets: np.ndarray, fractions):
+    """Offsets where each row's lobe (``signed`` > 0 around column ``peak``) falls, walking
+    outwards, below each fraction of its peak value (linear interpolation; NaN if it does not
+    within the row)."""
+    n, m = signed.shape
+    rows = np.arange(n)
+    top = signed[rows, peak]
+    steps = np.arange(m)[None, :]
+    order = np.clip(peak[:, None] + out_dir * steps, -1, m)            # columns walking outwards
+    inside = (order >= 0) & (order < m)
+    walk = np.where(inside, signed[rows[:, None], np.clip(order, 0, m - 1)], -np.inf)
+    out = []
+    for fraction in fractions:
+        level = fraction * top[:, None]
+        below = walk < level
+        first = np.where(below.any(axis=1), below.argmax(axis=1), -1)
+        ok = first >= 1
+        j1 = np.clip(first, 1, m - 1)
+        v0 = walk[rows, j1 - 1]
+        v1 = walk[rows, j1]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            frac = np.clip((v0 - level[:, 0]) / (v0 - v1), 0.0, 1.0)
+        step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
+        offset = offsets[np.clip(peak, 0, m - 1)] + out_dir * step * (j1 - 1 + frac)
+        out.append(np.where(ok & np.isfinite(v1), offset, np.nan))
+    return out
 
 
 def stripe_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
