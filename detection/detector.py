@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 
 from visland.camera import CameraModel
-from visland.detection.candidates import CandidateLines, candidate_lines, check_lines, hough_segments
+from visland.detection.candidates import candidate_lines, check_lines, hough_segments
 from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import LineFit, PixelLine, refine_line

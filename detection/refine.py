@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-__all__ = ["PixelLine", "LineFit", "sample_profiles", "edge_offsets", "stripe_offsets", "fit_line",
-           "refine_line"]
+__all__ = ["PixelLine", "LineFit", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
+           "stripe_offsets", "fit_line", "refine_line"]
 
 _DERIVATIVE = np.array([-1.0, -2.0, 0.0, 2.0, 1.0]) / 8.0
 
@@ -175,17 +175,14 @@ def _parabola_peak(values: np.ndarray, index: np.ndarray) -> np.ndarray:
     return np.clip(np.nan_to_num(delta), -0.5, 0.5)
 
 
-def edge_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int, prefer_outer: int = 0,
-                 outer_ratio: float = 0.4, window: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Sub-pixel position of the step edge in each profile.
+def edge_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
+                 window: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Sub-pixel position of the strongest step edge in each profile.
 
     Parameters
     ----------
     profiles : (n, m) grey levels; offsets : (m,) their positions along the normal.
     polarity : +1 (grey rises along the normal), -1 (falls) or 0 (strongest of either).
-    prefer_outer : 0, or +1/-1 to take, among the edges of the right sign that reach
-        ``outer_ratio`` of the strongest one, the one furthest along +normal / -normal (the
-        outer boundary of a painted side stripe rather than its inner edge).
     window : (n, m) bool, optional
         Where each profile may hold its edge.
 
@@ -202,25 +199,10 @@ def edge_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int, prefe
         signed = np.where(window, signed, -np.inf)
     index = np.argmax(signed, axis=1)
     best = signed[np.arange(len(index)), index]
-    if prefer_outer:
-        # local maxima of the signed slope reaching outer_ratio of the best one
-        interior = np.zeros_like(signed, dtype=bool)
-        interior[:, 1:-1] = (signed[:, 1:-1] >= signed[:, :-2]) & (signed[:, 1:-1] >= signed[:, 2:])
-        strong = interior & (signed >= outer_ratio * best[:, None]) & (best[:, None] > 0)
-        columns = np.arange(signed.shape[1])[None, :]
-        if prefer_outer > 0:
-            candidate = np.where(strong, columns, -1).max(axis=1)
-        else:
-            candidate = np.where(strong, columns, signed.shape[1]).min(axis=1)
-        has = (candidate >= 0) & (candidate < signed.shape[1])
-        index = np.where(has, candidate, index)
-        best = signed[np.arange(len(index)), index]
     delta = _parabola_peak(np.where(np.isfinite(signed), signed, 0.0), index)
     position = offsets[index] + delta * step
     valid = np.isfinite(best) & (best > 0) & (index > 1) & (index < signed.shape[1] - 2)
-    position = np.where(valid, position, np.nan)
-    strength = np.where(valid, best, 0.0)
-    return position, strength
+    return np.where(valid, position, np.nan), np.where(valid, best, 0.0)
 
 
 def transition_offsets(profiles: np.ndarray, offsets: np.ndarray, window: np.ndarray, halfspan_px: float = 2.0,
@@ -533,7 +515,7 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
             position, strength = boundary_offsets(profiles, offsets, outward, window, stripe_reach)
             contrast = strength / 0.5      # an area-sampled step of height h has slope ~h/2 at its ramp
         elif kind == "edge":
-            position, strength = edge_offsets(profiles, offsets, polarity, 0, window=window)
+            position, strength = edge_offsets(profiles, offsets, polarity, window=window)
             # a blurred step of height h has a peak slope near h / (sqrt(2 pi) sigma); with the
             # 5-tap derivative kernel and ~1 px blur, slope ~ 0.3 h: the contrast estimate
             contrast = strength / 0.3
