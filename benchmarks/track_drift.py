@@ -26,6 +26,9 @@ threshold corners' error against time; a JSON line at the end.
 (the same pixels, several times faster: its principal point is kept, so it is the same
 pinhole); the detector is not run on crops (it searches the whole frame).
 
+``benchmarks/track_height.py`` then feeds the tracked corners to the observers (the height
+error at 400/200/100 ft, thesis Table 5.14).
+
 Usage::
 
     python benchmarks/track_drift.py                                  # eight scenarios, full frames
@@ -233,6 +236,24 @@ def figures(out: Path, scenarios, names) -> dict:
     return table
 
 
+def summarise(table, names) -> dict:
+    """Per tracker and mark: mean and worst over the scenarios of the larger threshold-corner error."""
+    out = {}
+    for t in names:
+        row = {}
+        for label, _, _ in MARKS:
+            values = []
+            for scenario in table.values():
+                entry = scenario.get(t, {}).get(label)
+                if entry is None or entry[0] is None or entry[1] is None:
+                    continue
+                values.append(max(entry[0], entry[1]))
+            row[label] = {"mean": round(float(np.mean(values)), 2) if values else None,
+                          "worst": round(float(np.max(values)), 2) if values else None, "n": len(values)}
+        out[t] = row
+    return out
+
+
 def print_table(table, names) -> None:
     print("\npixel error of the tracked corners against the labels (near_left/near_right/far_left/far_right) at "
           "5, 3 and 1 km before the aiming point (along-track) and at 100 ft; n/a: the approach starts inside "
@@ -345,11 +366,15 @@ def main(argv=None) -> int:
             d = summary["detector"]
             print(f"detector on {s}: found in {100 * d['found_fraction']:.0f} % of frames, corner error median "
                   f"{d['corner_error_px_median']} px, max {d['corner_error_px_max']} px, {d['ms_per_frame']:.0f} ms/frame")
+    summary = summarise(table, shown)
+    print("\nthreshold corners over the scenarios (mean / worst of max(P', P''), px; lost counts as missing):")
+    for t, row in summary.items():
+        print(f"  {t:16s} " + "  ".join(f"{label} {v['mean']}/{v['worst']} ({v['n']} sc.)" for label, v in row.items()))
     plot_path = Path(args.plot) if args.plot else out / "tracking_drift.png"
     plot(out, scenarios, shown, plot_path)
     print(f"plot: {plot_path}")
     print(json.dumps({"benchmark": "track_drift", "size": args.size, "crop": args.crop, "scenarios": scenarios,
-                      "trackers": shown, "error_px": table,
+                      "trackers": shown, "summary_px": summary, "error_px": table,
                       "tracker_ms_per_frame": {s: summaries[s]["tracker_ms_per_frame"] for s in scenarios},
                       "detector": {s: summaries[s].get("detector") for s in scenarios}}))
     return 0
