@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from visland.contracts import atomic_write_text, read_estimates, read_truth, write_csv
+from visland.contracts import atomic_write_text, json_ready, read_estimates, read_truth, write_csv
 
 __all__ = ["RunResult", "load_run", "run_figures", "compare_runs", "error_at_height_of", "QUANTITIES"]
 
@@ -163,7 +163,7 @@ def compare_runs(run_paths, out_dir, echo=print) -> dict:
                                          for o, m, s, c in zip(observers, means, stds, counts)}
     text = "\n".join(md) + "\n"
     atomic_write_text(out_dir / "compare.md", text)
-    atomic_write_text(out_dir / "compare.json", json.dumps(_clean(summary), indent=2) + "\n")
+    atomic_write_text(out_dir / "compare.json", json.dumps(json_ready(summary), indent=2) + "\n")
     _plot(per_run, sources, out_dir)
     echo(text)
     return summary
@@ -193,13 +193,3 @@ def _plot(per_run, sources, out_dir: Path) -> None:
         axes[-1].set_xlabel("dX (m)")
         fig.savefig(out_dir / f"errors_vs_dx_{source}.png", dpi=90, bbox_inches="tight")
         plt.close(fig)
-
-
-def _clean(value):
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    return value

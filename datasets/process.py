@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from visland import __version__
-from visland.contracts import MEASUREMENT_COLUMNS, atomic_write_text, staged_output_dir, write_csv
+from visland.contracts import MEASUREMENT_COLUMNS, atomic_write_text, json_ready, staged_output_dir, write_csv
 
 __all__ = ["ProcessOptions", "process_input", "DEFAULT_OBSERVERS"]
 
@@ -97,17 +97,6 @@ def _deviation_errors(truth, estimates_path: Path) -> dict:
     return out
 
 
-def _clean(value):
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
-
 
 def process_input(input_path, out_dir, options: ProcessOptions | None = None, force: bool = False,
                   echo=print) -> dict:
@@ -146,7 +135,7 @@ def process_input(input_path, out_dir, options: ProcessOptions | None = None, fo
             doc = json.loads((staging / "metrics.json").read_text())
             doc["source"] = options.source
             doc["scenario"] = _scenario_of(source)
-            doc["deviations"] = _clean(deviations)
+            doc["deviations"] = json_ready(deviations)
             atomic_write_text(staging / "metrics.json", json.dumps(doc, indent=2) + "\n")
         wall = time.perf_counter() - started
         n = measurements.n_frames
@@ -168,7 +157,7 @@ def process_input(input_path, out_dir, options: ProcessOptions | None = None, fo
                 "total_wall_s": wall,
             },
         }
-        atomic_write_text(staging / "run.json", json.dumps(_clean(run), indent=2) + "\n")
+        atomic_write_text(staging / "run.json", json.dumps(json_ready(run), indent=2) + "\n")
         if options.report:
             _write_report(staging, source, measurements, metrics, deviations, run)
     _print_summary(run, metrics, deviations, out_dir, echo)

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from visland.contracts import ESTIMATE_EXTRA_COLUMNS
+from visland.contracts import ESTIMATE_EXTRA_COLUMNS, json_ready
 from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M
 from visland.estimation.registry import make_observer, observer_class, observer_features
 
@@ -182,19 +182,7 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
     if metrics:
         metrics_path = out_path.parent / "metrics.json"
         doc = {"definitions": "visland.estimation.metrics (thesis 5.2.1): errors are dH - dH_hat in metres",
-               "measurements": str(meas_path), "observers": _json_clean(metrics)}
+               "measurements": str(meas_path), "observers": json_ready(metrics)}
         atomic_write_text(metrics_path, json.dumps(doc, indent=2) + "\n")
         echo(f"wrote {metrics_path}")
     return metrics
-
-
-def _json_clean(value):
-    if isinstance(value, dict):
-        return {k: _json_clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_clean(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value

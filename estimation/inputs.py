@@ -198,7 +198,6 @@ class FeatureSeries:
     @classmethod
     def from_ideal(cls, features) -> "FeatureSeries":
         """From :class:`visland.features.IdealFeatures` (a simulation, no files)."""
-        m = len(features)
         uv = features.corners_uv[:, :2, :]
         visible = features.corners_visible[:, :2].all(axis=1)
         points_ok = visible & np.isfinite(uv).all(axis=(1, 2))

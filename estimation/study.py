@@ -36,6 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
+from visland.contracts import json_ready
+
 from visland.estimation.inputs import FeatureSeries, InertialSeries, PreparedInputs, prepare_inputs
 from visland.estimation.metrics import FT_TO_M, aggregate_at_100ft, error_at_height, run_metrics
 from visland.estimation.registry import make_observer, observer_features
@@ -259,12 +261,6 @@ def _json_default(value):
     raise TypeError(f"not JSON serialisable: {type(value).__name__}")
 
 
-def _clean(value):
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 def _table_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: str = "dF") -> dict:
     condition = spec.conditions[0]
     echo(f"study {spec.name}: {spec.title}")
@@ -308,7 +304,7 @@ def _table_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: st
         plots.append(str(path))
         echo(f"plot: {path}")
     return {"thesis_table": spec.thesis_table, "condition": condition.label,
-            "observers": {o: {k: (_clean(v) if not isinstance(v, dict) else {s: _clean(x) for s, x in v.items()})
+            "observers": {o: {k: (json_ready(v) if not isinstance(v, dict) else {s: json_ready(x) for s, x in v.items()})
                               for k, v in r.items()} for o, r in results.items()},
             "thesis": {o: {m: thesis_value(spec.thesis_table, o, key) for m, key, _ in TABLE_METRICS}
                        for o in spec.observers},
@@ -332,7 +328,7 @@ def _calibration_axes(error_deg: float, echo) -> dict:
                                   result.options.camera)
         run = run_observer(make_observer("ccpi-hg-2p"), prepared, (1.0 + INITIAL_HEIGHT_ERROR) * dh[0])
         m = run_metrics(run.t_s, dh, run.dh_m, start_t_s=run.start_t_s)
-        out[axis] = {k: _clean(m[k]) for k in ("err_400ft_m", "err_200ft_m", "err_100ft_m")}
+        out[axis] = {k: json_ready(m[k]) for k in ("err_400ft_m", "err_200ft_m", "err_100ft_m")}
         echo(f"  {axis:5s} {_fmt(m['err_400ft_m'])} {_fmt(m['err_200ft_m'])} {_fmt(m['err_100ft_m'])}")
     echo("")
     return out
@@ -352,7 +348,7 @@ def _print_table(spec: StudySpec, results: dict, echo) -> list:
             theirs = thesis_value(spec.thesis_table, obs, thesis_key) if spec.thesis_table else None
             mark = _flag(ours, theirs)
             if mark != " ":
-                flags.append({"observer": obs, "metric": key, "ours": _clean(ours), "thesis": theirs, "mark": mark})
+                flags.append({"observer": obs, "metric": key, "ours": json_ready(ours), "thesis": theirs, "mark": mark})
             cells.append(f"{_fmt(ours)}{mark}[{_fmt(theirs, 9).strip():>9s}]")
         echo(f"{obs:13s}" + "".join(f" | {c:>21s}" for c in cells))
     echo("")
@@ -393,7 +389,7 @@ def _std_along_study(spec: StudySpec, out: Path | None, seed: int, echo, heading
     for p in plots:
         echo(f"plot: {p}")
     return {"thesis_table": spec.thesis_table,
-            "observers": {o: {c: _clean(v) for c, v in r.items()} for o, r in results.items()},
+            "observers": {o: {c: json_ready(v) for c, v in r.items()} for o, r in results.items()},
             "thesis": {o: {c.label: thesis_value(spec.thesis_table, o, f"std_err_along_traj1_m_{c.label}")
                            for c in spec.conditions} for o in spec.observers},
             "flags": flags, "plots": plots}
@@ -420,8 +416,8 @@ def _ecc_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: str 
             dy400 = error_at_height(case.dh_true_m, case.dh_true_m - dy_err, 400 * FT_TO_M)
             dy100 = error_at_height(case.dh_true_m, case.dh_true_m - dy_err, 100 * FT_TO_M)
             figures.setdefault(scenario, {})[obs] = {
-                **{k2: _clean(v) for k2, v in metrics.items()}, "dy_err_400ft_m": _clean(dy400),
-                "dy_err_100ft_m": _clean(dy100)}
+                **{k2: json_ready(v) for k2, v in metrics.items()}, "dy_err_400ft_m": json_ready(dy400),
+                "dy_err_100ft_m": json_ready(dy100)}
             echo(f"{scenario:8s} {obs:9s} | {_fmt(metrics['conv_time_5pct_s'], 11)} | {_fmt(metrics['err_400ft_m'], 9)} | "
                  f"{_fmt(metrics['err_200ft_m'], 9)} | {_fmt(metrics['err_100ft_m'], 9)} | {_fmt(dy400, 9)} | "
                  f"{_fmt(dy100, 9)} | {_fmt(metrics['rms_err_m'], 8)}")

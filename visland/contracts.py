@@ -36,7 +36,7 @@ __all__ = [
     "TELEMETRY_COLUMNS", "TRUTH_COLUMNS", "TRUTH_EXTRA_COLUMNS", "LABEL_COLUMNS", "LABEL_EXTRA_COLUMNS",
     "MEASUREMENT_COLUMNS", "ESTIMATE_COLUMNS", "ESTIMATE_EXTRA_COLUMNS", "FRAMES_COLUMNS", "Table", "read_csv", "write_csv",
     "read_telemetry", "read_truth", "read_labels", "read_measurements", "read_frames_csv", "read_estimates",
-    "atomic_write_text", "atomic_write_bytes", "staged_output_dir", "check_time_column",
+    "atomic_write_text", "atomic_write_bytes", "staged_output_dir", "check_time_column", "json_ready",
 ]
 
 TRUTH_COLUMNS = ("t_s", "dx_m", "dy_m", "dh_m", "roll_deg", "pitch_deg", "dpsi_deg")
@@ -86,6 +86,21 @@ class Table(dict):
 
 
 # --------------------------------------------------------------------------- writing
+def json_ready(value):
+    """``value`` with numpy scalars turned into Python numbers and NaN/inf into None (JSON null)."""
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
 def _format_cell(value) -> str:
     if value is None:
         return ""
