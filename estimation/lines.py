@@ -219,6 +219,19 @@ class _LineObserver(Observer):
         (_, theta_l), (_, theta_r) = measurement.tolist()
         return measured_pair(measurement, [theta_l, 0.0, theta_r, 0.0])
 
+    # the state (y, eta) of the edge observers without extra states (ccpi-2l, oj-2l); the others
+    # override these three
+    def _reset(self, first, dh0_m, measurement):
+        self._y = self._start(first, measurement)
+        self._eta = 1.0 / dh0_m
+
+    def _get_state(self):
+        return np.array(self._y + [self._eta])
+
+    def _set_state(self, state):
+        self._y = state[:4].tolist()
+        self._eta = float(state[4])
+
     def _correction_interval(self, t_s: float) -> float:
         """Time over which to integrate the correction at a measurement, and restart the clock."""
         dtc = min(t_s - self._t_corrected, self.params.max_correction_interval_s)
@@ -287,17 +300,6 @@ class CCPI2L(_LineObserver):
 
     name: ClassVar[str] = "ccpi-2l"
     params_type: ClassVar[type] = CCPI2LParams
-
-    def _reset(self, first, dh0_m, measurement):
-        self._y = self._start(first, measurement)
-        self._eta = 1.0 / dh0_m
-
-    def _get_state(self):
-        return np.array(self._y + [self._eta])
-
-    def _set_state(self, state):
-        self._y = state[:4].tolist()
-        self._eta = float(state[4])
 
     def _step(self, inp, dt_s, measurement):
         p = self.params
@@ -620,17 +622,6 @@ class OJ2L(_LineObserver):
 
     name: ClassVar[str] = "oj-2l"
     params_type: ClassVar[type] = OJ2LParams
-
-    def _reset(self, first, dh0_m, measurement):
-        self._y = self._start(first, measurement)
-        self._eta = 1.0 / dh0_m
-
-    def _get_state(self):
-        return np.array(self._y + [self._eta])
-
-    def _set_state(self, state):
-        self._y = state[:4].tolist()
-        self._eta = float(state[4])
 
     def _step(self, inp, dt_s, measurement):
         p = self.params
