@@ -373,7 +373,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
         fit = _refine_edge(ctx, hypothesis.s0, k, d_lo + inset, d_hi - inset, outward, width_slope, halfwidth,
                            band_fraction=0.05 if prediction is None else 0.15,
-                           iterations=None if prediction is None else max(1, params.refine_iterations - 1))
+                           iterations=None if prediction is None else 1)
         if fit is None:
             return None, f"{name} edge: no consistent grey-level step along the candidate line"
         length = fit.extent[1] - fit.extent[0]
