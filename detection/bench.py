@@ -95,17 +95,19 @@ def run_bench(frames: BenchFrames, params: DetectorParams | None = None, repeat:
     """Time acquisition and tracking on ``frames``; returns the figures."""
     params = params or DetectorParams()
     camera = frames.camera
-    acquisition, acquisition_found = [], []
+    acquisition, acquisition_found, acquisition_cpu = [], [], []
     tracking, tracking_found, tracking_mode = [], [], []
     cpu_tracking = []
     for sequence in frames.sequences:
         for image, roll, pitch in sequence:
-            times = []
+            times, cpu_times = [], []
             for _ in range(repeat):
-                tic = time.perf_counter()
+                tic, cpu = time.perf_counter(), time.process_time()
                 result = detect_runway(image, camera, roll, pitch, params=params)
                 times.append(time.perf_counter() - tic)
+                cpu_times.append(time.process_time() - cpu)
             acquisition.append(statistics.median(times))
+            acquisition_cpu.append(statistics.median(cpu_times))
             acquisition_found.append(result.found)
     for _ in range(repeat):
         for sequence in frames.sequences:
@@ -129,6 +131,7 @@ def run_bench(frames: BenchFrames, params: DetectorParams | None = None, repeat:
         "acquisition_median_s": round(acquisition_median, 4),
         "acquisition_p90_s": round(float(np.percentile(acquisition, 90)), 4) if acquisition else None,
         "acquisition_found_rate": round(float(np.mean(acquisition_found)), 3) if acquisition_found else None,
+        "acquisition_cpu_median_s": round(statistics.median(acquisition_cpu), 4) if acquisition_cpu else None,
         "tracking_median_ms": round(1e3 * tracking_median, 2),
         "tracking_cpu_median_ms": round(1e3 * statistics.median(cpu_tracking), 2) if cpu_tracking else None,
         "tracking_fps": round(1.0 / tracking_median, 1) if tracking_median > 0 else None,
@@ -137,12 +140,19 @@ def run_bench(frames: BenchFrames, params: DetectorParams | None = None, repeat:
         "load_average_1min": round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None,
     }
     figures["meets_targets"] = bool(acquisition_median < 0.2 and tracking_median > 0 and 1.0 / tracking_median >= 50)
+    # CPU time counts what this process did whatever else runs on the machine (OpenCV may use
+    # both cores, so it can exceed the wall time on an idle machine)
+    cpu_tracking_median = figures["tracking_cpu_median_ms"]
+    figures["meets_targets_cpu"] = bool(figures["acquisition_cpu_median_s"] is not None
+                                        and figures["acquisition_cpu_median_s"] < 0.2
+                                        and cpu_tracking_median is not None and cpu_tracking_median <= 20.0)
     return figures
 
 
 def print_report(frames: BenchFrames, figures: dict) -> None:
     print(f"visland bench detect: {frames.description}")
-    print(f"  acquisition (whole frame): median {1e3 * figures['acquisition_median_s']:.1f} ms, "
+    print(f"  acquisition (whole frame): median {1e3 * figures['acquisition_median_s']:.1f} ms "
+          f"(CPU {1e3 * (figures['acquisition_cpu_median_s'] or math.nan):.1f} ms), "
           f"p90 {1e3 * (figures['acquisition_p90_s'] or math.nan):.1f} ms, runway found in "
           f"{100 * (figures['acquisition_found_rate'] or 0):.0f} % (target < 200 ms)")
     print(f"  tracking (region of interest): median {figures['tracking_median_ms']:.2f} ms "
