@@ -10,12 +10,21 @@ Modules, in pipeline order (each holds one idea):
 
 - :mod:`~visland.detection.params`: :class:`DetectorParams`, the stage's one parameter set.
 - :mod:`~visland.detection.horizon`: horizon coordinates (s, d), vanishing points.
-- :mod:`~visland.detection.candidates`: Canny + Hough candidate segments in a region of interest.
-- :mod:`~visland.detection.trapezoid`: the symmetry/trapezoid model picking left, right, centre.
+- :mod:`~visland.detection.candidates`: Canny + Hough candidate lines in a region of interest,
+  each checked and re-fitted on the frame.
+- :mod:`~visland.detection.pencil`: the frame resampled on the lines through one horizon point.
+- :mod:`~visland.detection.trapezoid`: the symmetry/trapezoid model picking left and right edges.
 - :mod:`~visland.detection.refine`: sub-pixel refinement of a line against the image gradient.
-- :mod:`~visland.detection.transverse`: threshold and runway-end lines, corners.
-- :mod:`~visland.detection.detector`: :func:`detect_runway`, tying the above together.
+- :mod:`~visland.detection.transverse`: the runway's surface extent, threshold and runway-end
+  lines, corners.
+- :mod:`~visland.detection.detector`: :func:`detect_runway`, tying the above together
+  (tracking from the previous result, acquisition on the whole ground otherwise).
 - :mod:`~visland.detection.result`: :class:`DetectionResult`.
+- :mod:`~visland.detection.run`, :mod:`~visland.detection.bench`, :mod:`~visland.detection.cli`:
+  ``visland detect`` and ``visland bench detect``.
+
+Pixel lengths in :class:`DetectorParams` are for a 2048-pixel-wide frame and are rescaled to
+the frame given, so the defaults serve every image size.
 """
 from visland.detection.detector import detect_runway
 from visland.detection.params import DetectorParams

@@ -56,6 +56,7 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     roll_rad, pitch_rad : float
         Inertial attitude at the frame's time; with the mounting they fix the horizon.
     params : DetectorParams, optional
+        Pixel lengths are for a 2048 px wide frame and rescaled to this one.
     previous : DetectionResult, optional
         The last detection. When it was found, the search runs in a region of interest
         predicted from it (tracking mode); otherwise the whole ground part of the frame is
