@@ -1,8 +1,19 @@
 """detect_runway: one frame in, a :class:`~visland.detection.result.DetectionResult` out.
 
-Pipeline (issue 4; thesis 5.3.2.2): horizon from the inertial roll and pitch, candidate lines
-(Canny + Hough) in a region of interest, the trapezoid/symmetry model, sub-pixel refinement
-of each line, threshold and runway end, corners, d_F and the heading deviation.
+Pipeline (issue 4; thesis 5.3.2.2):
+
+1. the horizon from the inertial roll and pitch and the camera mounting;
+2. tracking, when ``previous`` found the runway: the previous edges carried into this frame by
+   the camera's rotation are refined directly against the gradient; if they do not hold,
+   Canny + Hough candidates in the region of interest around them; if that fails too, or
+   with no previous runway, acquisition: candidates on the whole ground part of the frame;
+3. vanishing-point candidates from the candidate lines, the frame resampled on the lines
+   through each, and the trapezoid/symmetry model choosing the left and right edges;
+4. where the runway's surface starts and ends, sub-pixel refinement of each edge (past the
+   painted side stripes to the runway's boundary), the centre line midway between them;
+5. the vanishing point fused from the lines and the horizon, d_F and the heading deviation
+   (seed 001 eq. 18-19, through :mod:`visland.features`);
+6. the threshold and the runway end through the perpendicular vanishing point, the corners.
 
 Bad input never raises: a frame of the wrong size or type, a black, white or noise-only
 frame, a non-finite attitude or one that puts the horizon outside the image give a result
