@@ -13,9 +13,9 @@ campaign of eight approaches otherwise needs tens of GB of PNGs.
 
 Resumable: run the same command again after an interruption. A scenario whose runs are all
 up to date is skipped; a half-rendered dataset resumes frame by frame; the comparison is
-rebuilt. A campaign folder made
-with other settings is refused unless ``--force``. With ``--scheduler``, frames render on the
-Dask cluster and the runs are processed there as one task each.
+rebuilt. A campaign folder made with other settings is refused unless ``--force``. With
+``--scheduler``, frames render on the Dask cluster and each scenario's runs are processed
+there as one task (every source in one decoding pass).
 """
 from __future__ import annotations
 
@@ -108,12 +108,12 @@ def _prune_frames(dataset: Path) -> None:
     shutil.rmtree(dataset / "frames", ignore_errors=True)
 
 
-def _process_task(dataset: str, run_dir: str, source: str, observers: tuple) -> str:
-    """One processing job (module-level so that Dask can ship it to a worker)."""
-    from visland.datasets.process import ProcessOptions, process_input
+def _process_task(dataset: str, run_dirs: dict, observers: tuple) -> str:
+    """Process one dataset with every source it still needs, decoding each frame once
+    (module-level so that Dask can ship it to a worker)."""
+    from visland.datasets.process import ProcessOptions, process_many
     lines: list[str] = []
-    process_input(dataset, run_dir, ProcessOptions(source=source, observers=observers, quiet=True), force=True,
-                  echo=lines.append)
+    process_many(dataset, run_dirs, ProcessOptions(observers=observers, quiet=True), force=True, echo=lines.append)
     return "\n".join(lines)
 
 
@@ -164,8 +164,8 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
             dataset = out / "datasets" / scenario.name
             mine = [(out / "runs" / f"{scenario.name}-{source}", source) for source in options.sources]
             runs.extend(run_dir for run_dir, _ in mine)
-            todo = [(str(dataset), str(run_dir), source, observers) for run_dir, source in mine
-                    if not _run_is_current(run_dir, dataset, source, observers)]
+            todo = {source: str(run_dir) for run_dir, source in mine
+                    if not _run_is_current(run_dir, dataset, source, observers)}
             if not todo:
                 echo(f"[{time.perf_counter() - started:6.0f} s] {scenario.name}: every run up to date, kept")
                 continue
@@ -177,18 +177,15 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
             report = generate_dataset(job, dataset, workers=options.workers, scheduler=options.scheduler, force=False)
             echo(f"         {report.n_frames} frames: {report.rendered} rendered, {report.reused} kept, "
                  f"{report.seconds:.0f} s")
+            echo(f"[{time.perf_counter() - started:6.0f} s] process {scenario.name} with {', '.join(todo)}"
+                 + (f" on {options.scheduler}" if client is not None else ""))
             if client is not None:
-                echo(f"[{time.perf_counter() - started:6.0f} s] process {len(todo)} runs on {options.scheduler}")
-                futures = [client.submit(_process_task, *task, pure=False) for task in todo]
-                texts = client.gather(futures)
+                text = client.gather(client.submit(_process_task, str(dataset), todo, observers, pure=False))
             else:
-                texts = []
-                for task in todo:
-                    echo(f"[{time.perf_counter() - started:6.0f} s] process {Path(task[1]).name}")
-                    texts.append(_process_task(*task))
-            for task, text in zip(todo, texts):
-                summary = [line for line in text.splitlines() if "frames: runway found" in line]
-                echo(f"         {Path(task[1]).name}: " + (summary[0] if summary else text.splitlines()[-1]))
+                text = _process_task(str(dataset), todo, observers)
+            for line in text.splitlines():
+                if "frames: runway found" in line:
+                    echo("         " + line)
             if options.prune_frames:
                 _prune_frames(dataset)
                 echo(f"         {scenario.name}: frames deleted (--prune-frames); labels, telemetry and runs kept")

@@ -28,7 +28,7 @@ import numpy as np
 from visland import __version__
 from visland.contracts import MEASUREMENT_COLUMNS, atomic_write_text, json_ready, staged_output_dir, write_csv
 
-__all__ = ["ProcessOptions", "process_input", "DEFAULT_OBSERVERS"]
+__all__ = ["ProcessOptions", "process_input", "process_many", "DEFAULT_OBSERVERS"]
 
 #: Every observer of the seeds (SPEC names).
 DEFAULT_OBSERVERS = ("oj-2p", "ii-2p", "cccs-2p", "ccpi-hg-2p", "ccpi-hosm-2p", "cccj-2p", "kf-2p",
@@ -101,13 +101,25 @@ def _deviation_errors(truth, estimates_path: Path) -> dict:
 def process_input(input_path, out_dir, options: ProcessOptions | None = None, force: bool = False,
                   echo=print) -> dict:
     """Run the whole offline pipeline on ``input_path`` into ``out_dir``; return run.json's content."""
-    from visland.contracts import read_measurements
-    from visland.datasets.measure import measure
+    options = options or ProcessOptions()
+    return process_many(input_path, {options.source: out_dir}, options, force=force, echo=echo)[options.source]
+
+
+def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = None, force: bool = False,
+                 echo=print) -> dict:
+    """Process ``input_path`` with several measurement sources (``{source: out_dir}``), decoding
+    every frame once; one run folder per source. Returns ``{source: run.json content}``."""
+    from visland.datasets.measure import measure_many
     from visland.datasets.sources import open_source
-    from visland.estimation.command import EstimateOptions, estimate_folder
+    from visland.estimation.command import EstimateOptions
 
     options = options or ProcessOptions()
     started = time.perf_counter()
+    for source_kind in out_dirs:
+        replace(options, source=source_kind)               # validates the kind
+    for out_dir in out_dirs.values():
+        if Path(out_dir).exists() and not force:
+            raise ValueError(f"{out_dir}: output folder exists; choose another --out or pass --force to replace it")
     source = open_source(input_path, camera=options.camera, telemetry=options.telemetry,
                          frames_csv=options.frames_csv, fps=options.fps)
     if source.truth is None and options.initial_height_m is None:
@@ -116,8 +128,20 @@ def process_input(input_path, out_dir, options: ProcessOptions | None = None, fo
                                        initial_height_m=options.initial_height_m,
                                        initial_error=options.initial_error, params_file=options.params_file)
     echo(f"{source.name}: {len(source)} frames of {source.camera.width}x{source.camera.height}, "
-         f"{source.times_s[-1] - source.times_s[0]:.1f} s; measuring with {options.source}")
-    measurements = measure(source, options.source, init=options.init, quiet=options.quiet)
+         f"{source.times_s[-1] - source.times_s[0]:.1f} s; measuring with {', '.join(out_dirs)}")
+    measured = measure_many(source, list(out_dirs), init=options.init, quiet=options.quiet)
+    runs = {}
+    for kind, out_dir in out_dirs.items():
+        runs[kind] = _write_run(source, measured[kind], replace(options, source=kind), estimate_options,
+                                input_path, out_dir, force, started, echo)
+    return runs
+
+
+def _write_run(source, measurements, options, estimate_options, input_path, out_dir, force, started, echo) -> dict:
+    """Estimation, metrics, run.json and report of one source's measurements, into ``out_dir``."""
+    from visland.contracts import read_measurements
+    from visland.estimation.command import estimate_folder
+
     with staged_output_dir(out_dir, force=force) as staging:
         write_csv(staging / "measurements.csv", measurements.columns, MEASUREMENT_COLUMNS)
         source.camera.save(staging / "camera.json")
