@@ -129,8 +129,8 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
             d_range = (max(1.0, d_min - 0.3 * span), min(bottom_depth_px, d_max + 0.5 * span))
             rect = rectify(image, horizon, s0, k_range, d_range)
         else:   # the whole ground below the point, rows in proportion to depth
-            rect = rectify(image, horizon, s0, k_range, (2.0, min(bottom_depth_px, 4096.0)), max_rows=200,
-                           geometric_rows=True)
+            rect = rectify(image, horizon, s0, k_range, (2.0, min(bottom_depth_px, 4096.0)), max_rows=160,
+                           max_columns=3072, geometric_rows=True)
         if rect is None:
             continue
         edges = pencil_edges(rect, min_step=0.5 * params.min_contrast, max_edges=120)
