@@ -26,8 +26,18 @@ Modules, in pipeline order (each holds one idea):
 Pixel lengths in :class:`DetectorParams` are for a 2048-pixel-wide frame and are rescaled to
 the frame given, so the defaults serve every image size.
 """
-from visland.detection.detector import detect_runway
-from visland.detection.params import DetectorParams
-from visland.detection.result import LINE_NAMES, DetectionResult
+from visland.detection.params import DetectorParams      # light: no OpenCV
 
 __all__ = ["DetectorParams", "DetectionResult", "detect_runway", "LINE_NAMES"]
+
+
+def __getattr__(name):
+    # the detector pulls in OpenCV: import it when asked for, so that ``visland`` commands of
+    # other stages (which import visland.detection.cli) start fast
+    if name == "detect_runway":
+        from visland.detection.detector import detect_runway
+        return detect_runway
+    if name in ("DetectionResult", "LINE_NAMES"):
+        from visland.detection import result
+        return getattr(result, name)
+    raise AttributeError(f"module 'visland.detection' has no attribute {name!r}")
