@@ -278,7 +278,8 @@ def print_table(table, names) -> None:
                   f"{'-' if worst is None else f'{worst:.1f}':>9s} {e['measured_fraction']:9.3f}")
 
 
-def plot(out: Path, scenarios, names, path: Path, shown=("every_frame", "pure", "anchored", "anchored_labels")):
+def plot(out: Path, scenarios, names, path: Path, shown=("every_frame", "pure", "anchored", "anchored_labels"),
+         dpi: int = 110):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -318,7 +319,7 @@ def plot(out: Path, scenarios, names, path: Path, shown=("every_frame", "pure", 
     fig.suptitle("Threshold corners P' (solid) and P'' (dashed): distance from the label, pixels (2048 px camera)",
                  fontsize=10)
     fig.tight_layout(rect=(0, 0.1, 1, 0.95))
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
 
 
@@ -333,6 +334,7 @@ def main(argv=None) -> int:
     parser.add_argument("--workers", type=int, default=1, help="scenarios rendered in parallel (spawned processes)")
     parser.add_argument("--out", default="/tmp/tracking/drift", help="folder of the per-scenario results")
     parser.add_argument("--plot", default=None, help="also write the plot here (default: OUT/tracking_drift.png)")
+    parser.add_argument("--plot-dpi", type=int, default=110, help="plot resolution (default 110)")
     parser.add_argument("--force", action="store_true", help="recompute scenarios already done")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
@@ -371,7 +373,7 @@ def main(argv=None) -> int:
     for t, row in summary.items():
         print(f"  {t:16s} " + "  ".join(f"{label} {v['mean']}/{v['worst']} ({v['n']} sc.)" for label, v in row.items()))
     plot_path = Path(args.plot) if args.plot else out / "tracking_drift.png"
-    plot(out, scenarios, shown, plot_path)
+    plot(out, scenarios, shown, plot_path, dpi=args.plot_dpi)
     print(f"plot: {plot_path}")
     print(json.dumps({"benchmark": "track_drift", "size": args.size, "crop": args.crop, "scenarios": scenarios,
                       "trackers": shown, "summary_px": summary, "error_px": table,
