@@ -8,19 +8,19 @@ image the Hough transform sees and do not scale.
 """
 from __future__ import annotations
 
-import json
 import math
-import tomllib
-from dataclasses import asdict, dataclass, fields, replace
-from pathlib import Path
+from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import numpy as np
+
+from visland.params import ParamsFile
 
 __all__ = ["DetectorParams"]
 
 
 @dataclass(frozen=True)
-class DetectorParams:
+class DetectorParams(ParamsFile):
     """Parameters of :func:`visland.detection.detect_runway`.
 
     Parameters
@@ -95,6 +95,10 @@ class DetectorParams:
     reference_side_px : int
         Image width the pixel lengths above are given for.
     """
+
+    params_kind: ClassVar[str] = "detector"
+    toml_table: ClassVar[str | None] = "detector"
+
 
     acquisition_max_side_px: int = 1024
     tracking_max_side_px: int = 640
@@ -197,51 +201,3 @@ class DetectorParams:
             horizon_margin_px=self.horizon_margin_px * k)
 
     # ----------------------------------------------------------------- files
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict, source: str = "detector parameters") -> "DetectorParams":
-        """Build from a dictionary; unknown keys are an error naming the key."""
-        if not isinstance(data, dict):
-            raise ValueError(f"{source}: expected a table of parameters, got {type(data).__name__}")
-        known = {f.name for f in fields(cls)}
-        for key in data:
-            if key not in known:
-                raise ValueError(f"{source}: unknown detector parameter '{key}' (known: {', '.join(sorted(known))})")
-        try:
-            return cls(**data)
-        except ValueError as error:
-            raise ValueError(f"{source}: {error}") from None
-
-    def save(self, path) -> None:
-        """Write JSON (``.json``) or TOML (``.toml``)."""
-        path = Path(path)
-        if path.suffix.lower() == ".toml":
-            lines = ["# visland detector parameters (visland.detection.DetectorParams)"]
-            for key, value in self.to_dict().items():
-                lines.append(f"{key} = {value!r}" if not isinstance(value, float) else f"{key} = {value!r}")
-            path.write_text("\n".join(lines) + "\n")
-        elif path.suffix.lower() == ".json":
-            path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
-        else:
-            raise ValueError(f"{path}: detector parameters are saved as .json or .toml")
-
-    @classmethod
-    def load(cls, path) -> "DetectorParams":
-        """Read JSON or TOML written by :meth:`save` (or by hand: any subset of the fields)."""
-        path = Path(path)
-        try:
-            text = path.read_text()
-        except FileNotFoundError:
-            raise ValueError(f"{path}: detector parameter file not found") from None
-        try:
-            if path.suffix.lower() == ".toml":
-                data = tomllib.loads(text)
-            elif path.suffix.lower() == ".json":
-                data = json.loads(text)
-            else:
-                raise ValueError(f"{path}: detector parameters are read from .json or .toml")
-        except (json.JSONDecodeError, tomllib.TOMLDecodeError) as error:
-            raise ValueError(f"{path}: not valid {path.suffix[1:].upper()} ({error})") from None
-        return cls.from_dict(data, source=str(path))

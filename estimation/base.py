@@ -28,14 +28,13 @@ overflows, is rolled back and the step is flagged, so no NaN ever reaches the ou
 from __future__ import annotations
 
 import abc
-import json
 import math
-import tomllib
-from dataclasses import asdict, dataclass, fields
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+
+from visland.params import ParamsFile
 
 __all__ = [
     "ObserverInput",
@@ -149,7 +148,7 @@ class Estimate:
 
 
 # --------------------------------------------------------------------------- parameters
-class ObserverParams:
+class ObserverParams(ParamsFile):
     """Base of every observer's frozen parameter dataclass.
 
     Subclasses are ``@dataclass(frozen=True)`` with float fields and a ``__post_init__`` that
@@ -157,45 +156,9 @@ class ObserverParams:
     ``save``/``load``).
     """
 
-    def to_dict(self) -> dict:
-        return asdict(self)
+    params_kind: ClassVar[str] = "observer"
 
-    @classmethod
-    def from_dict(cls, data: dict, source: str = "observer parameters"):
-        """Build from a dictionary, naming any unknown key."""
-        if not isinstance(data, dict):
-            raise ValueError(f"{source}: expected a table of parameters, got {type(data).__name__}")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            raise ValueError(f"{source}: unknown parameter '{unknown[0]}' for {cls.__name__} "
-                             f"(known: {', '.join(sorted(known))})")
-        return cls(**data)
 
-    def save(self, path) -> None:
-        """Write JSON (``.json``) or TOML (``.toml``: flat ``key = value`` lines)."""
-        path = Path(path)
-        data = self.to_dict()
-        if path.suffix == ".toml":
-            text = "".join(f"{k} = {_toml_value(v)}\n" for k, v in data.items())
-        else:
-            text = json.dumps(data, indent=2) + "\n"
-        path.write_text(text)
-
-    @classmethod
-    def load(cls, path):
-        path = Path(path)
-        try:
-            text = path.read_text()
-        except OSError as error:
-            raise ValueError(f"{path}: cannot read observer parameters ({error.strerror})") from None
-        try:
-            data = tomllib.loads(text) if path.suffix == ".toml" else json.loads(text)
-        except (tomllib.TOMLDecodeError, json.JSONDecodeError) as error:
-            raise ValueError(f"{path}: not valid {'TOML' if path.suffix == '.toml' else 'JSON'} ({error})") from None
-        return cls.from_dict(data, source=str(path))
-
-    # checks for __post_init__ ---------------------------------------------------------
     def _check_positive(self, *names: str) -> None:
         for name in names:
             value = getattr(self, name)
@@ -208,18 +171,6 @@ class ObserverParams:
             raise ValueError(f"{type(self).__name__}.{name} must be a finite number, got {value!r}")
         if not low <= value <= high:
             raise ValueError(f"{type(self).__name__}.{name} = {value!r} is out of range [{low:g}, {high:g}]")
-
-
-def _toml_value(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (int, float)):
-        return repr(value)
-    if isinstance(value, str):
-        return json.dumps(value)
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise ValueError(f"cannot write {value!r} to TOML")
 
 
 # --------------------------------------------------------------------------- measurements

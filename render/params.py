@@ -7,11 +7,11 @@ no multisampling (see ``msaa_samples``).
 """
 from __future__ import annotations
 
-import json
 import math
-import tomllib
-from dataclasses import asdict, dataclass, fields
-from pathlib import Path
+from dataclasses import dataclass
+from typing import ClassVar
+
+from visland.params import ParamsFile
 
 __all__ = ["SceneParams", "SURFACES", "STYLES"]
 
@@ -22,7 +22,7 @@ STYLES = ("realistic", "flat")
 
 
 @dataclass(frozen=True)
-class SceneParams:
+class SceneParams(ParamsFile):
     """How the airport scene looks and how the sensor degrades it.
 
     Parameters
@@ -62,6 +62,10 @@ class SceneParams:
     distractors : bool
         Draw taxiways, apron, buildings and roads.
     """
+
+    params_kind: ClassVar[str] = "scene"
+    toml_table: ClassVar[str | None] = "scene"
+
 
     seed: int = 0
     style: str = "realistic"
@@ -114,55 +118,3 @@ class SceneParams:
         return cls(**base)
 
     # ----------------------------------------------------------------- files
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict, source: str = "scene parameters") -> "SceneParams":
-        if not isinstance(data, dict):
-            raise ValueError(f"{source}: expected a table of scene parameters, got {type(data).__name__}")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            raise ValueError(f"{source}: unknown scene parameter '{unknown[0]}' (known: {', '.join(sorted(known))})")
-        try:
-            return cls(**data)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"{source}: {error}") from None
-
-    def save(self, path) -> None:
-        """Write JSON (``.json``) or TOML (``.toml``)."""
-        path = Path(path)
-        if path.suffix == ".toml":
-            lines = []
-            for key, value in self.to_dict().items():
-                if isinstance(value, bool):
-                    lines.append(f"{key} = {'true' if value else 'false'}")
-                elif isinstance(value, str):
-                    lines.append(f'{key} = "{value}"')
-                else:
-                    lines.append(f"{key} = {value!r}")
-            path.write_text("\n".join(lines) + "\n")
-        else:
-            path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
-
-    @classmethod
-    def load(cls, path) -> "SceneParams":
-        """Read a JSON or TOML file of scene parameters (a ``[scene]`` table is accepted in TOML)."""
-        path = Path(path)
-        try:
-            text = path.read_text()
-        except FileNotFoundError:
-            raise ValueError(f"{path}: scene parameter file not found") from None
-        if path.suffix == ".toml":
-            try:
-                data = tomllib.loads(text)
-            except tomllib.TOMLDecodeError as error:
-                raise ValueError(f"{path}: not valid TOML ({error})") from None
-            data = data.get("scene", data)
-        else:
-            try:
-                data = json.loads(text)
-            except json.JSONDecodeError as error:
-                raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
-        return cls.from_dict(data, source=str(path))

@@ -36,11 +36,11 @@ matches as the runway grows; it matters for every policy but ``"every_frame"``.
 """
 from __future__ import annotations
 
-import json
 import math
-import tomllib
-from dataclasses import asdict, dataclass, fields
-from pathlib import Path
+from dataclasses import dataclass
+from typing import ClassVar
+
+from visland.params import ParamsFile
 
 __all__ = ["TrackerParams", "UPDATE_POLICIES", "INCONSISTENT_ACTIONS"]
 
@@ -50,7 +50,7 @@ INCONSISTENT_ACTIONS = ("flag", "reproject", "drop")
 
 
 @dataclass(frozen=True)
-class TrackerParams:
+class TrackerParams(ParamsFile):
     """Template tracker parameters (all pixel sizes for the image being tracked).
 
     Parameters
@@ -135,6 +135,10 @@ class TrackerParams:
         (within the gate of one another); the jump is reported.
     """
 
+    params_kind: ClassVar[str] = "tracker"
+    toml_table: ClassVar[str | None] = "tracker"
+
+
     template_size_px: int = 31
     search_radius_px: int = 16
     update_policy: str = "scale_change"
@@ -211,62 +215,3 @@ class TrackerParams:
         return self.template_size_px // 2
 
     # ----------------------------------------------------------------- files
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict, source: str = "tracker parameters") -> "TrackerParams":
-        """Build from a dictionary (a JSON object or a TOML table), naming any unknown key."""
-        if not isinstance(data, dict):
-            raise ValueError(f"{source}: expected a table of tracker parameters, got {type(data).__name__}")
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(data) - known)
-        if unknown:
-            raise ValueError(f"{source}: unknown tracker parameter '{unknown[0]}' (known: {', '.join(sorted(known))})")
-        try:
-            return cls(**data)
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"{source}: {error}") from None
-
-    def save(self, path) -> None:
-        """Write as JSON (``.json``) or TOML (``.toml``)."""
-        path = Path(path)
-        if path.suffix.lower() == ".json":
-            path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
-        elif path.suffix.lower() == ".toml":
-            lines = ["# visland tracker parameters (see visland.tracking.params)"]
-            for key, value in self.to_dict().items():
-                if isinstance(value, bool):
-                    text = "true" if value else "false"
-                elif isinstance(value, str):
-                    text = json.dumps(value)
-                else:
-                    text = repr(value)
-                lines.append(f"{key} = {text}")
-            path.write_text("\n".join(lines) + "\n")
-        else:
-            raise ValueError(f"{path}: tracker parameter files are .json or .toml")
-
-    @classmethod
-    def load(cls, path) -> "TrackerParams":
-        """Read a ``.json`` or ``.toml`` file; a TOML file may hold the keys at top level or under [tracker]."""
-        path = Path(path)
-        try:
-            raw = path.read_bytes()
-        except FileNotFoundError:
-            raise ValueError(f"{path}: tracker parameter file not found") from None
-        if path.suffix.lower() == ".json":
-            try:
-                data = json.loads(raw)
-            except json.JSONDecodeError as error:
-                raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
-        elif path.suffix.lower() == ".toml":
-            try:
-                data = tomllib.loads(raw.decode("utf-8"))
-            except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-                raise ValueError(f"{path}: not valid TOML ({error})") from None
-            if set(data) == {"tracker"}:
-                data = data["tracker"]
-        else:
-            raise ValueError(f"{path}: tracker parameter files are .json or .toml")
-        return cls.from_dict(data, source=str(path))

@@ -112,7 +112,7 @@ def test_params_round_trip_through_json_and_toml_and_name_unknown_keys(tmp_path)
         path = tmp_path / f"p{suffix}"
         params.save(path)
         assert CCPIHGParams.load(path) == params
-    with pytest.raises(ValueError, match="unknown parameter 'gain'"):
+    with pytest.raises(ValueError, match="unknown observer parameter 'gain'"):
         CCPIHGParams.from_dict({"gain": 1.0})
     with pytest.raises(ValueError, match="damping"):
         CCPIHGParams(damping=1.5)
