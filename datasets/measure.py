@@ -88,11 +88,10 @@ def _measure_ideal(source) -> Measurements:
 
 
 def _measure_detection(source, params, quiet) -> Measurements:
-    from visland.detection import DetectorParams, detect_runway
-    params = params or DetectorParams()
+    from visland.detection import DetectionSequence
+    sequence = DetectionSequence(source.camera, params)
     rows = _Rows("detection")
     flagged = []
-    previous = None
     analysis = 0.0
     start = time.perf_counter()
     for index, image, reason in source.frames(gray=True):
@@ -100,15 +99,11 @@ def _measure_detection(source, params, quiet) -> Measurements:
         if image is None:
             rows.add(index, t, None, False, reason, 0.0)
             flagged.append((index, reason))
-            previous = None
         else:
             tic = time.perf_counter()
-            result = detect_runway(image, source.camera, float(source.inertial.roll_rad[index]),
-                                   float(source.inertial.pitch_rad[index]), params=params, previous=previous)
+            result = sequence(image, float(source.inertial.roll_rad[index]), float(source.inertial.pitch_rad[index]), t)
             analysis += time.perf_counter() - tic
-            row = result.to_measurement_row()
-            rows.add(index, t, row, result.found, result.reason, result.confidence)
-            previous = result if result.found else None
+            rows.add(index, t, result.to_measurement_row(), result.found, result.reason, result.confidence)
         if not quiet:
             _progress(index + 1, len(source), start, "detect")
     return Measurements("detection", rows.columns(), flagged, analysis, time.perf_counter() - start)

@@ -20,6 +20,8 @@ Modules, in pipeline order (each holds one idea):
 - :mod:`~visland.detection.detector`: :func:`detect_runway`, tying the above together
   (tracking from the previous result, acquisition on the whole ground otherwise).
 - :mod:`~visland.detection.result`: :class:`DetectionResult`.
+- :mod:`~visland.detection.sequence`: :class:`DetectionSequence`, frame after frame (the last
+  good detection as the prior through short losses; re-acquisitions checked against it).
 - :mod:`~visland.detection.run`, :mod:`~visland.detection.bench`, :mod:`~visland.detection.cli`:
   ``visland detect`` and ``visland bench detect``.
 
@@ -28,7 +30,7 @@ the frame given, so the defaults serve every image size.
 """
 from visland.detection.params import DetectorParams      # light: no OpenCV
 
-__all__ = ["DetectorParams", "DetectionResult", "detect_runway", "LINE_NAMES"]
+__all__ = ["DetectorParams", "DetectionResult", "DetectionSequence", "detect_runway", "LINE_NAMES"]
 
 
 def __getattr__(name):
@@ -37,6 +39,9 @@ def __getattr__(name):
     if name == "detect_runway":
         from visland.detection.detector import detect_runway
         return detect_runway
+    if name == "DetectionSequence":
+        from visland.detection.sequence import DetectionSequence
+        return DetectionSequence
     if name in ("DetectionResult", "LINE_NAMES"):
         from visland.detection import result
         return getattr(result, name)

@@ -92,6 +92,24 @@ class DetectorParams(ParamsFile):
         Detections below this confidence are reported as not found.
     horizon_margin_px : float
         The horizon from roll and pitch must cross the image enlarged by this margin.
+    hold_s : float
+        Over a sequence (:class:`visland.detection.DetectionSequence`): how long the last good
+        detection keeps predicting the runway after frames where it was not found, before the
+        next search starts from nothing (a lost runway is then acquired on the whole frame).
+    max_edge_turn_rad, max_edge_turn_rate_rps : float
+        Over a sequence: a detection that did not come from tracking (a re-acquisition) is
+        refused when an edge's direction in the image differs from the last good detection's by
+        more than ``max_edge_turn_rad + max_edge_turn_rate_rps * dt`` (a field boundary or a
+        taxiway picked after a short loss).
+    max_vp_jump_px, max_vp_jump_rate_pxps : float
+        Over a sequence: the same for the vanishing point's move along the horizon (d_F), in
+        pixels of the reference image side.
+    max_threshold_jump_px, max_threshold_jump_fraction : float
+        Over a sequence: threshold corners farther than ``max_threshold_jump_px +
+        max_threshold_jump_fraction * threshold width`` per frame (at ``reference_rate_hz``)
+        from the last good detection's are dropped (the edges and d_F are kept).
+    reference_rate_hz : float
+        Frame rate the per-frame limits above are given for.
     reference_side_px : int
         Image width the pixel lengths above are given for.
     """
@@ -129,6 +147,14 @@ class DetectorParams(ParamsFile):
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     horizon_margin_px: float = 0.0
+    hold_s: float = 1.0
+    max_edge_turn_rad: float = 0.05
+    max_edge_turn_rate_rps: float = 0.3
+    max_vp_jump_px: float = 60.0
+    max_vp_jump_rate_pxps: float = 250.0
+    max_threshold_jump_px: float = 6.0
+    max_threshold_jump_fraction: float = 0.12
+    reference_rate_hz: float = 25.0
     reference_side_px: int = 2048
 
     def __post_init__(self):
@@ -173,6 +199,14 @@ class DetectorParams(ParamsFile):
         number("horizon_sigma_px", 0.01, 10000.0)
         number("tracking_sigma_px", 0.1, 10000.0)
         number("max_width_change", 0.01, 10.0)
+        number("hold_s", 0.0, 60.0)
+        number("max_edge_turn_rad", 0.0, 3.2)
+        number("max_edge_turn_rate_rps", 0.0, 100.0)
+        number("max_vp_jump_px", 0.0, 100000.0)
+        number("max_vp_jump_rate_pxps", 0.0, 1e6)
+        number("max_threshold_jump_px", 0.0, 100000.0)
+        number("max_threshold_jump_fraction", 0.0, 100.0)
+        number("reference_rate_hz", 0.1, 10000.0)
         number("min_confidence", 0.0, 1.0)
         number("horizon_margin_px", 0.0, 100000.0)
         number("reference_side_px", 16, 100000, integer=True)
@@ -198,6 +232,9 @@ class DetectorParams(ParamsFile):
             vp_tolerance_px=max(0.5, self.vp_tolerance_px * k),
             horizon_sigma_px=max(0.05, self.horizon_sigma_px * k),
             tracking_sigma_px=max(1.0, self.tracking_sigma_px * k),
-            horizon_margin_px=self.horizon_margin_px * k)
+            horizon_margin_px=self.horizon_margin_px * k,
+            max_vp_jump_px=self.max_vp_jump_px * k,
+            max_vp_jump_rate_pxps=self.max_vp_jump_rate_pxps * k,
+            max_threshold_jump_px=self.max_threshold_jump_px * k)
 
     # ----------------------------------------------------------------- files

@@ -2,8 +2,8 @@
 
 Reads the folder with :class:`visland.folder.FrameFolder` (frames in name order, their times,
 telemetry interpolated at those times, the camera), detects the runway frame by frame (each
-frame tracked from the previous detection; the whole frame searched again after a frame
-without one) and writes ``measurements.csv`` in the labels schema plus ``source``, ``found``,
+frame tracked from the last good detection, :class:`~visland.detection.sequence.DetectionSequence`;
+the whole frame searched again after a loss longer than ``hold_s``) and writes ``measurements.csv`` in the labels schema plus ``source``, ``found``,
 ``reason`` and ``confidence`` (:data:`visland.contracts.MEASUREMENT_COLUMNS`). A frame that
 cannot be used (unreadable, wrong size) is a row with ``found = 0`` and the reason; nothing
 raises on a bad frame.
@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from visland.contracts import MEASUREMENT_COLUMNS, write_csv
-from visland.detection.detector import detect_runway
 from visland.detection.params import DetectorParams
-from visland.detection.result import DetectionResult, not_found
+from visland.detection.result import not_found
+from visland.detection.sequence import DetectionSequence
 
 __all__ = ["FolderDetection", "detect_folder", "write_measurements"]
 
@@ -50,7 +50,7 @@ def detect_folder(folder, params: DetectorParams | None = None, progress: bool =
     """Detect the runway in every frame of a :class:`visland.folder.FrameFolder`."""
     params = params or DetectorParams()
     out = FolderDetection()
-    previous: DetectionResult | None = None
+    sequence = DetectionSequence(folder.camera, params)
     start = time.perf_counter()
     n = len(folder) if max_frames is None else min(len(folder), max_frames)
     for index in range(n):
@@ -61,13 +61,12 @@ def detect_folder(folder, params: DetectorParams | None = None, progress: bool =
             out.n_unusable += 1
         else:
             tic = time.perf_counter()
-            result = detect_runway(image, folder.camera, float(folder.inertial.roll_rad[index]),
-                                   float(folder.inertial.pitch_rad[index]), params=params, previous=previous)
+            result = sequence(image, float(folder.inertial.roll_rad[index]), float(folder.inertial.pitch_rad[index]),
+                              t_s)
             out.analysis_s += time.perf_counter() - tic
         if result.found:
             out.n_found += 1
             out.n_tracking += result.mode == "tracking"
-        previous = result if result.found else None
         out.rows.append(result.to_measurement_row(frame=index, t_s=t_s))
         if progress:
             _progress(index + 1, n, start, out.n_found)

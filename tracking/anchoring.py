@@ -133,20 +133,23 @@ def detector_anchor_provider(camera, inertial, params=None, track_previous: bool
     Raises ValueError if the detection stage is not available.
     """
     try:
-        from visland.detection import DetectorParams, detect_runway
+        from visland.detection import DetectionSequence, DetectorParams, detect_runway
     except ImportError as error:
         raise ValueError(f"--anchor needs the detection stage (visland.detection.detect_runway), "
                          f"which does not import here: {error}") from None
     params = params or DetectorParams()
-    state = {"previous": None}
+    # frame after frame, the detector keeps its last good detection as the prior through short
+    # losses and checks re-acquisitions against it (visland.detection.sequence)
+    sequence = DetectionSequence(camera, params) if track_previous else None
 
     def provider(frame_index: int, image) -> AnchorObservation:
         if image is None:
             return AnchorObservation.nothing("no image")
-        result = detect_runway(image, camera, float(inertial.roll_rad[frame_index]),
-                               float(inertial.pitch_rad[frame_index]), params=params,
-                               previous=state["previous"] if track_previous else None)
-        state["previous"] = result if getattr(result, "found", False) else None
+        roll, pitch = float(inertial.roll_rad[frame_index]), float(inertial.pitch_rad[frame_index])
+        if sequence is not None:
+            result = sequence(image, roll, pitch, float(inertial.t_s[frame_index]))
+        else:
+            result = detect_runway(image, camera, roll, pitch, params=params)
         return anchor_from_detection(result)
 
     return provider

@@ -1,0 +1,94 @@
+"""DetectionSequence: the last good detection as the prior, re-acquisitions checked against it."""
+import math
+
+import numpy as np
+import pytest
+
+from visland.camera import CameraModel
+from visland.detection import sequence as seq_module
+from visland.detection.params import DetectorParams
+from visland.detection.result import DetectionResult, not_found
+
+CAMERA = CameraModel.default(2048)
+
+
+def _result(theta_left=0.30, theta_right=-0.30, dF=10.0, near_v=1500.0, width=80.0, mode="tracking"):
+    corners = np.array([[1000.0 - width / 2, near_v], [1000.0 + width / 2, near_v], [990.0, 1100.0], [1010.0, 1100.0]])
+    return DetectionResult(found=True, reason="", confidence=0.9, corners_uv=corners,
+                           corners_found=np.ones(4, dtype=bool),
+                           lines={"left": (0.01, theta_left), "right": (-0.01, theta_right), "center": (0.0, 0.0)},
+                           dF_px=dF, dpsi_rad=0.0, mode=mode)
+
+
+@pytest.fixture
+def scripted(monkeypatch):
+    """Replace the detector by a script of results; record the prior each call received."""
+    calls = []
+
+    def install(results):
+        queue = list(results)
+
+        def fake(image, camera, roll, pitch, params=None, previous=None):
+            calls.append(previous)
+            return queue.pop(0)
+        monkeypatch.setattr(seq_module, "detect_runway", fake)
+        return calls
+    return install
+
+
+def _run(sequence, n, dt=0.04):
+    image = np.zeros((2048, 2048), np.uint8)
+    return [sequence(image, 0.0, 0.0, k * dt) for k in range(n)]
+
+
+def test_a_short_loss_keeps_the_last_good_detection_as_the_prior(scripted):
+    good = _result()
+    calls = scripted([good, not_found("transient"), not_found("transient"), _result(mode="tracking")])
+    _run(seq_module.DetectionSequence(CAMERA), 4)
+    assert calls[0] is None and calls[1] is good and calls[2] is good and calls[3] is good
+
+
+def test_after_hold_s_the_search_starts_afresh(scripted):
+    params = DetectorParams(hold_s=0.1)
+    calls = scripted([_result()] + [not_found("lost")] * 4)
+    _run(seq_module.DetectionSequence(CAMERA, params), 5)
+    assert calls[1] is not None and calls[2] is not None and calls[3] is None and calls[4] is None
+
+
+def test_a_reacquisition_that_turned_the_edges_is_refused(scripted):
+    # a field boundary picked after a loss: edges nearly horizontal instead of steep
+    scripted([_result(), not_found("transient"), _result(theta_left=1.3, theta_right=1.25, mode="acquisition")])
+    results = _run(seq_module.DetectionSequence(CAMERA), 3)
+    assert not results[2].found and results[2].reason.startswith("refused: the left edge turned")
+
+
+def test_a_reacquisition_whose_vanishing_point_jumped_is_refused(scripted):
+    scripted([_result(dF=10.0), _result(dF=400.0, mode="reacquisition")])
+    results = _run(seq_module.DetectionSequence(CAMERA), 2)
+    assert not results[1].found and "vanishing point moved 390 px" in results[1].reason
+
+
+def test_a_consistent_reacquisition_is_kept_and_tracking_is_trusted(scripted):
+    scripted([_result(), _result(theta_left=0.31, dF=14.0, mode="reacquisition"),
+              _result(theta_left=1.3, mode="tracking")])
+    results = _run(seq_module.DetectionSequence(CAMERA), 3)
+    assert results[1].found and results[2].found
+
+
+def test_a_threshold_jump_drops_only_the_threshold_corners(scripted):
+    # the touchdown-zone bars, 57 px up the runway, taken for the threshold for one frame
+    scripted([_result(near_v=1500.0), _result(near_v=1443.0), _result(near_v=1501.0)])
+    results = _run(seq_module.DetectionSequence(CAMERA), 3)
+    jumped = results[1]
+    assert jumped.found and not jumped.corners_found[:2].any() and jumped.corners_found[2:].all()
+    assert "threshold corners dropped: moved 57 px" in jumped.reason
+    row = jumped.to_measurement_row()
+    assert math.isnan(row["near_left_u_px"]) and row["near_left_visible"] == 0 and math.isfinite(row["left_rho"])
+    assert results[2].corners_found.all()       # compared with the last good corners, the next frame is fine
+
+
+def test_bad_arguments_are_named():
+    with pytest.raises(ValueError, match="camera"):
+        seq_module.DetectionSequence("camera")
+    with pytest.raises(ValueError, match="params"):
+        seq_module.DetectionSequence(CAMERA, params={})
