@@ -73,6 +73,11 @@ class CampaignOptions:
     prune_frames: bool = False
     png_compression: int = 1
 
+    def __post_init__(self):
+        from visland.datasets.measure import parse_source
+        for source in self.sources:
+            parse_source(source)
+
     def settings(self) -> dict:
         """What must match for a campaign folder to be resumed (not workers nor scheduler)."""
         data = asdict(self)
@@ -162,7 +167,7 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
         for name in options.scenarios:
             scenario = resolve_scenario(name)
             dataset = out / "datasets" / scenario.name
-            mine = [(out / "runs" / f"{scenario.name}-{source}", source) for source in options.sources]
+            mine = [(out / "runs" / f"{scenario.name}-{source.replace(':', '-')}", source) for source in options.sources]
             runs.extend(run_dir for run_dir, _ in mine)
             todo = {source: str(run_dir) for run_dir, source in mine
                     if not _run_is_current(run_dir, dataset, source, observers)}

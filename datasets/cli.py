@@ -91,8 +91,10 @@ def register(subparsers):
     p.add_argument("--camera", metavar="FILE", help="camera.json (default: INPUT/camera.json or beside the video)")
     p.add_argument("--frames-csv", metavar="FILE", help="frame,t_s times (default: INPUT/frames.csv; else --fps)")
     p.add_argument("--fps", type=float, default=None, help="frame rate when there is no frames.csv (default 25, or the video's)")
-    p.add_argument("--source", choices=("detection", "tracking", "anchored", "ideal"), default="detection",
-                   help="how features are measured (default detection)")
+    p.add_argument("--source", default="detection", metavar="SOURCE",
+                   help="how features are measured: detection (default), tracking, anchored (tracking re-anchored on "
+                        "detection) or ideal (the folder's exact labels); tracking and anchored may name a template "
+                        "update policy, e.g. tracking:every_frame (the thesis's drifting tracker)")
     p.add_argument("--observer", nargs="+", metavar="NAME", help=OBSERVER_HELP)
     p.add_argument("--init", metavar="labels|'u,v;u,v'", default=None,
                    help="tracking designation of the threshold corners (default: labels when present)")
@@ -127,8 +129,9 @@ def register(subparsers):
     p.add_argument("--out", required=True, metavar="DIR", help="campaign folder (resumed if it holds the same campaign)")
     p.add_argument("--size", type=int, default=2048, metavar="PX", help="image size (default 2048)")
     p.add_argument("--fps", type=float, default=25.0, help="frame rate (default 25)")
-    p.add_argument("--sources", nargs="+", choices=("detection", "tracking", "anchored", "ideal"),
-                   default=["detection", "tracking", "anchored"], help="measurement sources (default all three)")
+    p.add_argument("--sources", nargs="+", metavar="SOURCE", default=["detection", "tracking", "anchored"],
+                   help="measurement sources (default detection tracking anchored; also ideal, and tracker policies "
+                        "such as tracking:every_frame), processed in one decoding pass per scenario")
     p.add_argument("--observer", nargs="+", metavar="NAME", help=OBSERVER_HELP)
     p.add_argument("--seed", type=int, default=0, help="seed of every random generator (default 0)")
     p.add_argument("--workers", type=int, default=2, metavar="N", help="local rendering processes (default 2)")

@@ -17,9 +17,25 @@ import numpy as np
 
 from visland.contracts import LABEL_COLUMNS, MEASUREMENT_COLUMNS
 
-__all__ = ["Measurements", "measure", "measure_many", "SOURCES"]
+__all__ = ["Measurements", "measure", "measure_many", "parse_source", "SOURCES"]
 
 SOURCES = ("detection", "tracking", "anchored", "ideal")
+
+
+def parse_source(kind: str) -> tuple[str, str | None]:
+    """``"tracking"`` or ``"tracking:every_frame"`` (a template update policy of
+    :class:`visland.tracking.TrackerParams`) -> (source, policy or None)."""
+    base, _, policy = str(kind).partition(":")
+    if base not in SOURCES:
+        raise ValueError(f"--source must be one of {', '.join(SOURCES)} (tracking and anchored may name a template "
+                         f"update policy, e.g. tracking:every_frame), got '{kind}'")
+    if policy:
+        from visland.tracking.params import UPDATE_POLICIES
+        if base not in ("tracking", "anchored"):
+            raise ValueError(f"--source {kind}: only tracking and anchored take an update policy")
+        if policy not in UPDATE_POLICIES:
+            raise ValueError(f"--source {kind}: unknown update policy '{policy}' (known: {', '.join(UPDATE_POLICIES)})")
+    return base, policy or None
 _FEATURE_COLUMNS = [c for c in MEASUREMENT_COLUMNS if c not in ("frame", "t_s", "source", "found", "reason", "confidence")]
 
 
@@ -109,26 +125,26 @@ def _measure_detection(source, params, quiet) -> Measurements:
     return Measurements("detection", rows.columns(), flagged, analysis, time.perf_counter() - start)
 
 
-def _measure_tracking(source, anchored, init, quiet) -> Measurements:
-    from visland.tracking import track_source
+def _measure_tracking(source, kind, init, quiet) -> Measurements:
+    from visland.tracking import TrackerParams, track_source
+    base, policy = parse_source(kind)
+    params = TrackerParams(update_policy=policy) if policy else None
     start = time.perf_counter()
-    result = track_source(source, anchor=anchored, init=init,
+    result = track_source(source, anchor=base == "anchored", init=init, params=params,
                           progress=None if quiet else (lambda done, total: _progress(done, total, start, "track")))
-    return Measurements("anchored" if anchored else "tracking", result.columns, result.flagged,
-                        result.analysis_s, time.perf_counter() - start)
+    return Measurements(kind, result.columns, result.flagged, result.analysis_s, time.perf_counter() - start)
 
 
 def measure(source, kind: str = "detection", detector_params=None, init=None, quiet: bool = False) -> Measurements:
     """Measure every frame of ``source`` with ``kind`` (one of :data:`SOURCES`)."""
-    if kind not in SOURCES:
-        raise ValueError(f"--source must be one of {', '.join(SOURCES)}, got '{kind}'")
-    if kind == "ideal":
+    base, _ = parse_source(kind)
+    if base == "ideal":
         return _measure_ideal(source)
     if source.inertial is None:
         raise ValueError(f"{source.name}: telemetry is needed to analyse frames (roll and pitch fix the horizon)")
-    if kind == "detection":
+    if base == "detection":
         return _measure_detection(source, detector_params, quiet)
-    return _measure_tracking(source, kind == "anchored", init, quiet)
+    return _measure_tracking(source, kind, init, quiet)
 
 
 class _TeeSource:
@@ -162,8 +178,7 @@ def measure_many(source, kinds, init=None, quiet: bool = False) -> dict:
     if len(kinds) == 1 or all(kind == "ideal" for kind in kinds):
         return {kind: measure(source, kind, init=init, quiet=quiet) for kind in kinds}
     for kind in kinds:
-        if kind not in SOURCES:
-            raise ValueError(f"--source must be one of {', '.join(SOURCES)}, got '{kind}'")
+        parse_source(kind)
     imaging = [k for k in kinds if k != "ideal"]
     queues = {k: queue.Queue(maxsize=8) for k in imaging}
     results: dict = {}

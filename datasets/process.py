@@ -54,9 +54,8 @@ class ProcessOptions:
     params_file: str | None = None
 
     def __post_init__(self):
-        from visland.datasets.measure import SOURCES
-        if self.source not in SOURCES:
-            raise ValueError(f"--source must be one of {', '.join(SOURCES)}, got '{self.source}'")
+        from visland.datasets.measure import parse_source
+        parse_source(self.source)
         if not self.observers:
             raise ValueError("--observer: give at least one observer name")
         if self.fps is not None and not (math.isfinite(self.fps) and self.fps > 0):

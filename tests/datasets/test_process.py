@@ -190,3 +190,13 @@ def test_several_sources_in_one_decoding_pass_match_separate_runs(generated, tmp
     b = read_measurements(tmp_path / "d1" / "measurements.csv")
     np.testing.assert_array_equal(np.nan_to_num(a["near_left_u_px"], nan=-1), np.nan_to_num(b["near_left_u_px"], nan=-1))
     assert set(read_measurements(tmp_path / "t" / "measurements.csv")["source"]) == {"tracking"}
+
+
+def test_a_tracker_policy_is_a_source_of_its_own(generated, tmp_path):
+    from visland.datasets.measure import parse_source
+    assert parse_source("tracking:every_frame") == ("tracking", "every_frame")
+    with pytest.raises(ValueError, match="only tracking and anchored take an update policy"):
+        parse_source("detection:never")
+    run = process_input(generated, tmp_path / "memo", _quiet(source="tracking:every_frame", report=False),
+                        echo=lambda s: None)
+    assert run["source"] == "tracking:every_frame" and run["n_frames"] > 0
