@@ -289,7 +289,6 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
     its outer boundary, which is the runway's edge.
     """
     horizon, params = ctx.horizon, ctx.params
-    span = max(d_near - d_far, 1.0)
     d_ref = 0.5 * (d_far + d_near)
     line = _pencil_pixel_line(horizon, s0, k, d_ref)
     scale = math.sqrt(1 + k * k)
@@ -376,7 +375,6 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     bottom_depth = _deepest_visible(horizon, camera.width, camera.height)
     # where the strip's surface starts and ends, before fitting its edges there (beyond its
     # ends, texture lined up with an edge would turn the fit)
-    span = max(hypothesis.d_near - hypothesis.d_far, 4.0)
     extent = surface_extent(ctx.image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
                             (hypothesis.d_far, hypothesis.d_near), (1.0, bottom_depth), marking_fraction=0.0,
                             max_rows=300)

@@ -192,7 +192,6 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     import trimesh
 
     flat = params.style == "flat"
-    rng = np.random.default_rng(params.seed)
     layout = airport_layout(runway, distractors=params.distractors and not flat)
     marking_layout = runway_markings(runway)
     scene = pyrender.Scene(bg_color=(0.0, 0.0, 0.0, 1.0), ambient_light=(0.0, 0.0, 0.0))

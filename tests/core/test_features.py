@@ -14,7 +14,7 @@ import pytest
 
 from visland.camera import CameraModel
 from visland.features import (batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF, horizon_line,
-                              ideal_features, line_dynamics_terms, observability_lines, observability_points,
+                              ideal_features, line_dynamics_terms, observability_points,
                               point_virtual_dynamics, project_runway_corners, runway_lines, vanishing_point_xy)
 from visland.flight import simulate_flight
 from visland.runway import Runway

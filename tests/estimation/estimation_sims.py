@@ -34,3 +34,15 @@ def true_virtual_points(result, states=None) -> np.ndarray:
 
 def true_height(result) -> np.ndarray:
     return -result.frames.p_runway_m[:, 2]
+
+
+def random_line_inputs(rng):
+    """Plausible approach inputs for the line model, as ``lines_model.inputs_of`` orders them:
+    camera velocity (70-80 m/s along the optical axis), small rates, the runway down axis near
+    the image y axis, then the vertical velocity."""
+    v = np.array([rng.normal(0, 5), rng.normal(0, 5), rng.uniform(65, 80)])
+    w = rng.normal(0, 0.05, 3)
+    n = np.array([rng.normal(0, 0.1), 1.0, rng.uniform(0.0, 0.3)])
+    n /= np.linalg.norm(n)
+    return tuple(v) + tuple(w) + tuple(n) + (rng.uniform(-1, 5),)
+

@@ -7,16 +7,9 @@ hand-derived entries the observers use.
 import numpy as np
 import pytest
 
+from estimation_sims import random_line_inputs
 from visland.estimation.lines import _edge_blocks, _pair_jacobian, ccpi_correction, cccj_increment, cccj_jacobian
 from visland.estimation.lines_model import pair_model
-
-
-def _inputs(rng):
-    v = np.array([rng.normal(0, 5), rng.normal(0, 5), rng.uniform(65, 80)])
-    w = rng.normal(0, 0.05, 3)
-    n = np.array([rng.normal(0, 0.1), 1.0, rng.uniform(0.0, 0.3)])
-    n /= np.linalg.norm(n)
-    return tuple(v) + tuple(w) + tuple(n) + (rng.uniform(-1, 5),)
 
 
 @pytest.fixture
@@ -25,7 +18,7 @@ def cases():
     out = []
     for _ in range(20):
         y = [rng.uniform(-1, 1), rng.uniform(-0.3, 0.3), rng.uniform(-1, 1), rng.uniform(-0.3, 0.3)]
-        out.append((y, rng.uniform(1 / 800, 1 / 30), _inputs(rng)))
+        out.append((y, rng.uniform(1 / 800, 1 / 30), random_line_inputs(rng)))
     return out
 
 

@@ -6,18 +6,10 @@ import pytest
 
 from visland.camera import wrap_line_chart
 from visland.features import line_dynamics_terms
+from estimation_sims import random_line_inputs
 from visland.estimation.lines_model import (align_to, edge_terms, edge_terms_and_jacobian, ii_edge_gradient,
                                             ii_edge_integral, ii_edge_mismatch, measured_pair, pair_model,
                                             pair_observability)
-
-
-def _random_inputs(rng):
-    """Plausible approach inputs: 70-80 m/s along the optical axis, small rates, n near the image y axis."""
-    v = np.array([rng.normal(0, 5), rng.normal(0, 5), rng.uniform(65, 80)])
-    w = rng.normal(0, 0.05, 3)
-    n = np.array([rng.normal(0, 0.1), 1.0, rng.uniform(0.0, 0.3)])
-    n /= np.linalg.norm(n)
-    return tuple(v) + tuple(w) + tuple(n) + (rng.uniform(-1, 5),)
 
 
 @pytest.fixture
@@ -25,7 +17,7 @@ def samples():
     rng = np.random.default_rng(20260601)
     out = []
     for _ in range(40):
-        u = _random_inputs(rng)
+        u = random_line_inputs(rng)
         out.append((rng.uniform(-1.2, 1.2), rng.uniform(-0.4, 0.4), u))
     return out
 

@@ -1,11 +1,9 @@
 """The two-point observers: model by finite differences, closed forms against numpy, convergence on a flight."""
-import math
-
 import numpy as np
 import pytest
 
-from estimation_sims import prepared, simulation, true_height, true_virtual_points
-from visland.estimation.points import (CCCJ2P, CCCS2P, CCPIHG2P, CCPIHOSM2P, II2P, OJ2P, _quaternion_matrix,
+from estimation_sims import prepared, simulation, true_height
+from visland.estimation.points import (CCPIHG2P, _quaternion_matrix,
                                        output_combination, points_observability, points_phi,
                                        pseudo_inverse_correction)
 from visland.estimation.registry import make_observer
