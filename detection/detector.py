@@ -471,8 +471,15 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         half = max(8.0, 0.5 * params.threshold_search_fraction * depth_span, 0.1 * depth)
         return max(0.5, depth - half), min(bottom_depth, depth + half)
 
-    near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_near_expected,
-                                window(d_near_expected), outward=1, min_step=min_step)
+    # the runway's surface running out of the bottom of the image hides the threshold: a step
+    # found there would be a marking (the last second before the threshold)
+    d_exit = _depth_leaving_image(horizon, s0_vp, 0.5 * (k_l_vp + k_r_vp), d_mid, bottom_depth, width, height)
+    if d_near_expected >= d_exit - 2.0:
+        near = None
+        edges_reach_border = True
+    else:
+        near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
+                                    d_near_expected, window(d_near_expected), outward=1, min_step=min_step)
     if near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
     else:
@@ -554,6 +561,17 @@ def _refine_centre(ctx: _Context, s0, k_c, k_l, k_r, d_far, d_near, polarity_hin
         if best is not None and best.support >= 0.5:
             break            # a painted line is white: the dark try only if the bright one fails
     return best
+
+
+def _depth_leaving_image(horizon: HorizonFrame, s0: float, k: float, d_from: float, d_to: float,
+                         width: int, height: int) -> float:
+    """Depth at which the pencil line ``s = s0 + k d`` leaves the image (searched in ``[d_from, d_to]``)."""
+    depths = np.linspace(d_from, max(d_to, d_from + 1.0), 400)
+    uv = horizon.pencil_point(s0, k, depths)
+    inside = (uv[:, 0] >= -0.5) & (uv[:, 0] <= width - 0.5) & (uv[:, 1] >= -0.5) & (uv[:, 1] <= height - 0.5)
+    if not inside.any():
+        return float(d_from)
+    return float(depths[np.nonzero(inside)[0][-1]])
 
 
 def _deepest_visible(horizon: HorizonFrame, width: int, height: int) -> float:

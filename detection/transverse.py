@@ -134,13 +134,16 @@ def _meet(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:
 def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                          d_expected: float, d_window: tuple, outward: int, min_step: float,
                          n_columns: int = 48, step_d_px: float = 0.5,
-                         min_significance: float = 2.5) -> TransverseLine | None:
+                         min_significance: float = 2.5, marking_fraction: float = 1.2) -> TransverseLine | None:
     """Locate the threshold (``outward = +1``: outside is at larger depth) or the runway end
     (``outward = -1``) near depth ``d_expected`` within ``d_window = (d_min, d_max)``.
 
     ``d_expected`` is where the runway's surface ends (:func:`surface_extent`): the boundary is
-    the outermost clear step from a pixel inside it to a couple of pixels beyond it (else the
-    step nearest to it, weighted by its strength).
+    the outermost clear step from a pixel inside it to as far beyond it as a band of threshold
+    markings can reach (``marking_fraction`` runway widths along the runway, as in
+    :func:`surface_extent`: between 1 and 3 km the blended stripes can look like the ground, so
+    the surface seems to end at their inner edge, 3 to 7 px short of the threshold), else the
+    step nearest to it, weighted by its strength.
 
     Returns None when no step stands out of the profile's noise by ``min_significance`` or
     reaches a quarter of ``min_step`` grey levels per pixel.
@@ -209,7 +212,8 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     # boundary is the outermost clear step from just inside that row to a little beyond it;
     # failing one there, the step nearest to it weighted by its strength
     inner = max(1.5, 0.01 * d_expected)
-    outer = max(2.5, 0.02 * d_expected)
+    width_s = abs(sd_right[0] - sd_left[0]) * d_expected / d_ref       # runway width along the horizon at d_expected
+    outer = max(2.5, 0.02 * d_expected, marking_fraction * width_s * d_expected / horizon.camera.fx + 1.0)
     beyond = (depths[peaks] - d_expected) * outward
     near = peaks[(beyond >= -inner) & (beyond <= outer) & (magnitude[peaks] >= 0.25 * magnitude[peaks].max())]
     if len(near):
