@@ -182,7 +182,16 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
     if metrics:
         metrics_path = out_path.parent / "metrics.json"
         doc = {"definitions": "visland.estimation.metrics (thesis 5.2.1): errors are dH - dH_hat in metres",
-               "measurements": str(meas_path), "observers": json_ready(metrics)}
+               "measurements": _path_from(meas_path, metrics_path.parent), "observers": json_ready(metrics)}
         atomic_write_text(metrics_path, json.dumps(doc, indent=2) + "\n")
         echo(f"wrote {metrics_path}")
     return metrics
+
+
+def _path_from(path: Path, folder: Path) -> str:
+    """``path`` relative to ``folder`` when it lies inside it (a run folder stays valid when moved
+    or renamed), else as given."""
+    try:
+        return str(path.resolve().relative_to(folder.resolve()))
+    except ValueError:
+        return str(path)
