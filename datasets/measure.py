@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from visland.contracts import LABEL_COLUMNS, MEASUREMENT_COLUMNS
+from visland.folder import as_grey
 
 __all__ = ["Measurements", "measure", "measure_many", "parse_source", "SOURCES"]
 
@@ -110,7 +111,7 @@ def _measure_detection(source, params, quiet) -> Measurements:
     flagged = []
     analysis = 0.0
     start = time.perf_counter()
-    for index, image, reason in source.frames(gray=True):
+    for index, image, reason in source.frames(gray=False):        # colour: the chroma places the threshold
         t = float(source.times_s[index])
         if image is None:
             rows.add(index, t, None, False, reason, 0.0)
@@ -164,7 +165,7 @@ class _TeeSource:
             item = self._frames.get()
             if item is None:
                 return
-            yield item
+            yield (item[0], as_grey(item[1]), item[2]) if gray else item
 
 
 def measure_many(source, kinds, init=None, quiet: bool = False) -> dict:
@@ -197,7 +198,7 @@ def measure_many(source, kinds, init=None, quiet: bool = False) -> dict:
     for thread in threads:
         thread.start()
     try:
-        for item in source.frames(gray=True):
+        for item in source.frames(gray=False):         # colour once; consumers wanting grey convert
             for k in imaging:
                 queues[k].put(item)
     finally:

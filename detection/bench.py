@@ -2,7 +2,8 @@
 
 Frames come from a frame folder (``--dir``, e.g. written by ``visland generate``) or are
 rendered in memory with :class:`visland.render.FrameRenderer` along a scenario: short runs of
-consecutive frames (the camera rate) at a few distances from the threshold. Acquisition is
+consecutive frames (the camera rate) at a few distances from the threshold, in colour as the
+pipeline reads them (grey conversion included in the timings). Acquisition is
 timed on every frame with no previous detection (the whole frame searched); tracking runs
 each sequence in order, every frame detected from the previous one (region of interest).
 Medians of wall time, over ``--repeat`` passes; the last line of the output is one JSON
@@ -25,7 +26,8 @@ __all__ = ["BenchFrames", "frames_from_folder", "render_frames", "run_bench"]
 
 
 class BenchFrames:
-    """Sequences of consecutive grey frames with the camera and the inertial attitude."""
+    """Sequences of consecutive RGB frames (what ``detect`` and ``process`` feed the detector)
+    with the camera and the inertial attitude."""
 
     def __init__(self, camera, sequences, description: str):
         self.camera = camera
@@ -49,7 +51,7 @@ def frames_from_folder(path, n_sequences: int, length: int) -> BenchFrames:
     for start in dict.fromkeys(starts.tolist()):
         sequence = []
         for i in range(start, start + length):
-            image, reason = folder.read_frame(i, gray=True)
+            image, reason = folder.read_frame(i, gray=False)
             if image is None:
                 raise ValueError(f"{path}: {reason}")
             sequence.append((image, float(folder.inertial.roll_rad[i]), float(folder.inertial.pitch_rad[i])))
@@ -60,7 +62,6 @@ def frames_from_folder(path, n_sequences: int, length: int) -> BenchFrames:
 def render_frames(scenario_name: str, size: int, distances_m, length: int, fps: float = 25.0) -> BenchFrames:
     """Render ``length`` consecutive frames at each distance from the threshold (in memory)."""
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    import cv2
     from visland.camera import CameraModel
     from visland.features import batch_R_camera_from_runway
     from visland.flight import simulate_flight
@@ -84,8 +85,7 @@ def render_frames(scenario_name: str, size: int, distances_m, length: int, fps: 
             sequence = []
             for k in range(len(times)):
                 rgb = renderer.render(states.p_runway_m[k], R[k])
-                sequence.append((cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), float(states.roll_rad[k]),
-                                 float(states.pitch_rad[k])))
+                sequence.append((rgb, float(states.roll_rad[k]), float(states.pitch_rad[k])))
             sequences.append(sequence)
     return BenchFrames(camera, sequences, f"{scenario.name} rendered at {size}x{size}, {length} frames at "
                                           f"{', '.join(f'{d:g}' for d in distances_m)} m from the threshold")

@@ -31,7 +31,7 @@ from visland.camera import CameraModel
 from visland.detection.candidates import candidate_lines, check_lines, hough_segments
 from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
-from visland.detection.refine import LineFit, PixelLine, refine_line
+from visland.detection.refine import LineFit, PixelLine, chroma_boundary, refine_line
 from visland.detection.result import DetectionResult, not_found
 from visland.detection.transverse import find_transverse_line, surface_extent
 from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
@@ -44,11 +44,11 @@ def check_frame(image, camera: CameraModel) -> str | None:
     """Why ``image`` cannot be searched (None when it can): type, shape, size, contrast."""
     if not isinstance(image, np.ndarray):
         return f"frame is a {type(image).__name__}, not an image array"
-    if image.ndim != 2:
-        return f"frame has shape {image.shape}; a grey-level (H, W) image is expected"
+    if not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
+        return f"frame has shape {image.shape}; a grey-level (H, W) or RGB (H, W, 3) image is expected"
     if image.dtype != np.uint8:
-        return f"frame has dtype {image.dtype}; uint8 grey levels are expected"
-    height, width = image.shape
+        return f"frame has dtype {image.dtype}; uint8 levels are expected"
+    height, width = image.shape[:2]
     if (width, height) != (camera.width, camera.height):
         return f"frame is {width}x{height} but the camera is {camera.width}x{camera.height}"
     return None
@@ -60,8 +60,10 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
 
     Parameters
     ----------
-    image : ndarray of uint8, shape (H, W)
-        The frame, grey levels (convert colour frames first). Its size must be the camera's.
+    image : ndarray of uint8, shape (H, W) or (H, W, 3)
+        The frame, grey levels or RGB; its size must be the camera's. Everything runs on grey
+        levels; colour adds the chroma profile that places the threshold and the runway end
+        where grass meets grey pavement (:mod:`visland.detection.transverse`).
     camera : CameraModel
         Intrinsics and mounting (pixels: (0, 0) at the centre of the top-left pixel).
     roll_rad, pitch_rad : float
@@ -97,6 +99,9 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     problem = check_frame(image, camera)
     if problem:
         return fail(problem)
+    colour = None
+    if image.ndim == 3:
+        colour, image = image, cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
     roll, pitch = _as_float(roll_rad), _as_float(pitch_rad)
     if not (math.isfinite(roll) and math.isfinite(pitch)):
         return fail(f"attitude is not finite (roll {roll_rad!r}, pitch {pitch_rad!r})")
@@ -115,7 +120,7 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     if spread < params.min_contrast:
         return fail(f"frame has no contrast below the horizon (grey levels within {spread:.0f})")
 
-    context = _Context(image, camera, horizon, params, roll, pitch, start)
+    context = _Context(image, camera, horizon, params, roll, pitch, start, colour)
     try:
         result, why = _search_frame(context, previous, ground)
     except (ArithmeticError, np.linalg.LinAlgError, cv2.error) as error:
@@ -156,8 +161,9 @@ def _search_frame(context: "_Context", previous: DetectionResult | None, ground)
 class _Context:
     """What every step of one frame's search shares."""
 
-    def __init__(self, image, camera, horizon, params, roll, pitch, start):
+    def __init__(self, image, camera, horizon, params, roll, pitch, start, colour=None):
         self.image = image
+        self.colour = colour
         self.camera = camera
         self.horizon = horizon
         self.params = params
@@ -312,10 +318,18 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
         width = abs(width_slope) * depth / scale
         return np.clip(band_fraction * width, 2.0, halfwidth_px)
 
-    return refine_line(ctx.image, line, (t_lo, t_hi), "edge", polarity=0,
-                       halfwidth_px=band, n_samples=params.refine_samples,
-                       iterations=iterations or params.refine_iterations, min_contrast=params.min_contrast,
-                       outward=outward_s * sign, outward_reach_px=reach)
+    fit = refine_line(ctx.image, line, (t_lo, t_hi), "edge", polarity=0,
+                      halfwidth_px=band, n_samples=params.refine_samples,
+                      iterations=iterations or params.refine_iterations, min_contrast=params.min_contrast,
+                      outward=outward_s * sign, outward_reach_px=reach)
+    if fit is not None and ctx.colour is not None:
+        # grey pavement against coloured ground: the chroma step is the edge even where the side
+        # stripe, blended with the asphalt, has the grass's grey level
+        on_chroma = chroma_boundary(ctx.colour, fit, outward_s * sign,
+                                    float(np.max(reach(np.array(fit.extent) + (fit.line.point - line.point) @ line.direction))))
+        if on_chroma is not None:
+            fit = on_chroma
+    return fit
 
 
 def _pencil_of(horizon: HorizonFrame, fit: LineFit) -> tuple[float, float, float]:
@@ -479,7 +493,8 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         edges_reach_border = True
     else:
         near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
-                                    d_near_expected, window(d_near_expected), outward=1, min_step=min_step)
+                                    d_near_expected, window(d_near_expected), outward=1, min_step=min_step,
+                                    colour=ctx.colour)
     if near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
     else:
@@ -491,7 +506,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         if not corners_found[:2].all():
             notes.append("a threshold corner lies outside the image")
     far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
-                               window(d_far_expected), outward=-1, min_step=min_step)
+                               window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour)
     if far is None:
         notes.append("runway end not found")
     else:

@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 
 __all__ = ["PixelLine", "LineFit", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
-           "stripe_offsets", "fit_line", "refine_line"]
+           "stripe_offsets", "fit_line", "refine_line", "chroma_boundary"]
 
 _DERIVATIVE = np.array([-1.0, -2.0, 0.0, 2.0, 1.0]) / 8.0
 
@@ -100,11 +100,12 @@ class LineFit:
 
 def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: float,
                     step_px: float = 1.0, taps_px: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Grey-level profiles across a line.
+    """Grey-level (or chroma) profiles across a line.
 
     Parameters
     ----------
-    image : ndarray (H, W), uint8 or float32
+    image : ndarray (H, W), uint8 or float32; or (H, W, 3) RGB uint8, whose chroma (largest
+        minus smallest channel) is sampled
     centres_uv : ndarray (n, 2)
         Profile centres (pixels).
     normal_uv, direction_uv : ndarray (2,) or (n, 2)
@@ -133,7 +134,7 @@ def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: fl
     n = len(centres)
     map_u = grid[..., 0].reshape(n * 3, -1)
     map_v = grid[..., 1].reshape(n * 3, -1)
-    height, width = image.shape
+    height, width = image.shape[:2]
     outside = ((map_u < -0.5) | (map_v < -0.5) | (map_u > width - 0.5) | (map_v > height - 0.5)
                | ~np.isfinite(map_u) | ~np.isfinite(map_v))
     inside_u, inside_v = map_u[~outside], map_v[~outside]
@@ -144,7 +145,8 @@ def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: fl
     v0 = max(0, int(math.floor(inside_v.min())) - 1)
     u1 = min(width, int(math.ceil(inside_u.max())) + 2)
     v1 = min(height, int(math.ceil(inside_v.max())) + 2)
-    crop = np.asarray(image[v0:v1, u0:u1], dtype=np.float32)
+    crop = image[v0:v1, u0:u1]
+    crop = np.asarray(crop.max(axis=2) - crop.min(axis=2) if crop.ndim == 3 else crop, dtype=np.float32)
     map_u = np.where(outside, -10.0, map_u - u0).astype(np.float32)
     map_v = np.where(outside, -10.0, map_v - v0).astype(np.float32)
     values = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
@@ -586,6 +588,76 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         current = new_line
         scale_band /= 2.0
     return result
+
+
+def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float, min_change: float = 8.0,
+                    min_span: float = 0.6, n_samples: int = 200) -> LineFit | None:
+    """Move a region's refined boundary (``fit``, from grey levels) onto its chroma boundary.
+
+    A runway is grey pavement, white paint and rubber; grass and fields beside it are not grey.
+    Where a painted side stripe, blended within a pixel with the asphalt, matches the grass's
+    grey level, the grey step is the stripe's inner edge, up to a stripe width inside the
+    runway; the chroma (largest minus smallest of R, G, B) still steps at the edge. Chroma
+    profiles across ``fit.line`` (0.5 px apart): in each, the steepest chroma rise towards the
+    outside (``outward`` along ``fit.line.normal``) between ``reach_px + 1`` inside the line
+    and 1.5 px outside it, at the centroid of its derivative lobe, kept when the chroma rises
+    by ``min_change`` levels across it. A line fitted to those points replaces the grey one
+    when they cover ``min_span`` of the grey line's span; otherwise None (the chroma does not
+    tell: grey ground, haze, a grey-level camera).
+    """
+    line = fit.line
+    t0, t1 = fit.extent
+    if not (math.isfinite(t0) and math.isfinite(t1)) or t1 - t0 < 4.0:
+        return None
+    n = int(max(3, min(n_samples, math.floor(t1 - t0) + 1)))
+    t = np.linspace(t0, t1, n)
+    centres = line.point + t[:, None] * line.direction
+    profiles, offsets = sample_profiles(colour, centres, line.normal, line.direction, reach_px + 5.0, step_px=0.5)
+    out_dir = 1.0 if outward >= 0 else -1.0
+    rel = offsets * out_dir                                   # > 0 towards the outside
+    g = np.full(profiles.shape, np.nan, np.float32)
+    g[:, 1:-1] = (profiles[:, 2:] - profiles[:, :-2]) * out_dir          # rise towards the outside, per pixel
+    window = (rel >= -reach_px - 1.0) & (rel <= 1.5)
+    rising = np.where(np.isfinite(g) & window[None, :], g, -np.inf)
+    peak = np.argmax(rising, axis=1)
+    rows = np.arange(n)
+    idx = np.clip(peak[:, None] + np.arange(-2, 3)[None, :], 0, len(offsets) - 1)
+    w = np.maximum(np.nan_to_num(g[rows[:, None], idx]), 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        position = (w * offsets[idx]).sum(axis=1) / w.sum(axis=1)
+    # the chroma just outside minus just inside the located boundary
+    here = position[:, None] * out_dir
+    finite = np.isfinite(profiles)
+    values = np.where(finite, profiles, 0.0)
+
+    def mean(mask):
+        mask = mask & finite
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return (values * mask).sum(axis=1) / mask.sum(axis=1)
+
+    change = mean((rel[None, :] >= here + 1.0) & (rel[None, :] <= here + 3.0)) \
+        - mean((rel[None, :] <= here - 1.0) & (rel[None, :] >= here - 3.0))
+    keep = np.isfinite(rising[rows, peak]) & np.isfinite(position) & (change >= min_change)
+    if keep.sum() < 3 or np.ptp(t[keep]) < min_span * (t1 - t0):
+        return None
+    points = centres + position[:, None] * line.normal
+    fitted = fit_line(np.where(keep[:, None], points, np.nan), np.where(keep, change, 0.0))
+    if fitted is None:
+        return None
+    new_line, inliers, _ = fitted
+    if new_line.direction @ line.direction < 0:
+        new_line = PixelLine(new_line.point, -new_line.direction)
+    t_in = (points[inliers] - new_line.point) @ new_line.direction
+    if inliers.sum() < 3 or np.ptp(t_in) < min_span * (t1 - t0):
+        return None
+    residuals = new_line.distance(points[inliers])
+    rms = max(float(np.sqrt(np.mean(residuals ** 2))), 0.05)
+    spread = float(np.sum((t_in - t_in.mean()) ** 2))
+    return LineFit(line=new_line, residual_px=rms, support=fit.support, contrast=fit.contrast, polarity=fit.polarity,
+                   extent=(float(t_in.min()), float(t_in.max())),
+                   sigma_offset_px=rms / math.sqrt(int(inliers.sum())),
+                   sigma_angle_rad=rms / math.sqrt(spread) if spread > 0 else math.inf,
+                   n_inliers=int(inliers.sum()), points=points[inliers])
 
 
 def _net_step(profiles: np.ndarray, offsets: np.ndarray, position: np.ndarray, outward: int,

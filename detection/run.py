@@ -55,7 +55,7 @@ def detect_folder(folder, params: DetectorParams | None = None, progress: bool =
     n = len(folder) if max_frames is None else min(len(folder), max_frames)
     for index in range(n):
         t_s = float(folder.times_s[index])
-        image, reason = folder.read_frame(index, gray=True)
+        image, reason = folder.read_frame(index, gray=False)      # colour: the chroma places the threshold
         if image is None:
             result = not_found(reason)
             out.n_unusable += 1

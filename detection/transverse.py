@@ -8,7 +8,13 @@ Along the runway, transverse lines are sampled between the two edges (columns at
 the width, clear of the side stripes) and averaged into one profile; the threshold is the
 outermost grey-level step of that profile near the point where the edges' support ends (the
 grass, or whatever precedes the runway, against the runway's surface and threshold marks),
-located to a fraction of a pixel. The corners P', P'' (thesis Fig. 3.5, Remark 5.3.1) are
+located to a fraction of a pixel. Colour frames add a second profile, the chroma (largest minus
+smallest of R, G, B): paved runways are grey and grass or fields are not, and from 1 km out the
+threshold stripes, blended within a pixel with the asphalt, can match the grass's grey level
+exactly, so the grey step shows only the stripes' inner edge (1 to 2 px short of the threshold)
+while the chroma step stays at the threshold. The chroma step is used when it is clear; the
+grey one otherwise (a paved area beyond the threshold, snow, a grey-level camera). The corners
+P', P'' (thesis Fig. 3.5, Remark 5.3.1) are
 the intersections of the edges with the threshold line, the far corners those with the
 runway-end line.
 
@@ -16,6 +22,7 @@ Pixels: (0, 0) is the centre of the top-left pixel (SPEC).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -134,7 +141,8 @@ def _meet(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:
 def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                          d_expected: float, d_window: tuple, outward: int, min_step: float,
                          n_columns: int = 48, step_d_px: float = 0.5,
-                         min_significance: float = 2.5, marking_fraction: float = 1.2) -> TransverseLine | None:
+                         min_significance: float = 2.5, marking_fraction: float = 1.2,
+                         colour=None, min_chroma_step: float = 8.0) -> TransverseLine | None:
     """Locate the threshold (``outward = +1``: outside is at larger depth) or the runway end
     (``outward = -1``) near depth ``d_expected`` within ``d_window = (d_min, d_max)``.
 
@@ -145,8 +153,13 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     the surface seems to end at their inner edge, 3 to 7 px short of the threshold), else the
     step nearest to it, weighted by its strength.
 
+    ``colour`` (the frame as (H, W, 3) uint8, optional) adds the chroma profile (module
+    docstring): its step, rising towards the outside, replaces the grey one when the chroma
+    differs by at least ``min_chroma_step`` levels across it and it lies between the grey step
+    (or, without one, ``d_expected``) and the outer end of a marking band.
+
     Returns None when no step stands out of the profile's noise by ``min_significance`` or
-    reaches a quarter of ``min_step`` grey levels per pixel.
+    reaches a quarter of ``min_step`` grey levels per pixel (in grey and in chroma).
     """
     d_min, d_max = (float(x) for x in d_window)
     if not (math.isfinite(d_min) and math.isfinite(d_max)) or d_max - d_min < 6 * step_d_px:
@@ -178,14 +191,108 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     v0 = int(max(0, math.floor(v[inside].min()) - 1))
     u1 = int(min(width, math.ceil(u[inside].max()) + 2))
     v1 = int(min(height, math.ceil(v[inside].max()) + 2))
-    crop = np.asarray(image[v0:v1, u0:u1], dtype=np.float32)
-    values = cv2.remap(crop, (u - u0).astype(np.float32), (v - v0).astype(np.float32), cv2.INTER_LINEAR,
+    maps = ((u - u0).astype(np.float32), (v - v0).astype(np.float32))
+    inner = max(1.5, 0.01 * d_expected)
+    width_s = abs(sd_right[0] - sd_left[0]) * d_expected / d_ref       # runway width along the horizon at d_expected
+    outer = max(2.5, 0.02 * d_expected, marking_fraction * width_s * d_expected / horizon.camera.fx + 1.0)
+    profile_of = functools.partial(_depth_profile, maps=maps, inside=inside, rows_ok=rows_ok)
+    grey = _step_profile(profile_of(image[v0:v1, u0:u1]), depths, step_d_px, d_expected, outward)
+    chosen = grey.pick(min_significance, 0.25 * min_step, inner, outer, outward) if grey else None
+    best = (grey, chosen) if chosen is not None else None
+    if colour is not None:
+        patch = colour[v0:v1, u0:u1]
+        chroma = _step_profile(profile_of(patch.max(axis=2) - patch.min(axis=2)), depths, step_d_px,
+                               d_expected, outward)
+        if chroma is not None:
+            # the boundary lies at or beyond the grey step (which may be the stripes' inner edge)
+            d_from = depths[chosen] if chosen is not None else d_expected
+            pick = chroma.pick_rising(min_significance, min_chroma_step, d_from, inner, outer, outward)
+            if pick is not None:
+                best = (chroma, pick)
+    if best is None:
+        return None
+    profile, chosen = best
+    depth = profile.subpixel(chosen)
+    centre_point = horizon.pencil_point(s0, k_centre, depth)
+    line_h = np.cross(np.array([centre_point[0], centre_point[1], 1.0]), v2)
+    line_h = line_h / np.linalg.norm(line_h[:2])
+    return TransverseLine(line_h=line_h, corner_left_uv=_meet(line_h, line_left),
+                          corner_right_uv=_meet(line_h, line_right), depth_px=depth,
+                          step=float(profile.g[chosen]), significance=float(profile.magnitude[chosen] / profile.noise))
+
+
+def _depth_profile(patch, maps, inside, rows_ok) -> np.ndarray:
+    """Mean of ``patch`` along each transverse line (NaN where too little of it is in the image)."""
+    values = cv2.remap(np.asarray(patch, dtype=np.float32), maps[0], maps[1], cv2.INTER_LINEAR,
                        borderMode=cv2.BORDER_REPLICATE)
-    values = np.where(inside, values, np.nan)
-    profile = row_mean(values)
-    profile = np.where(rows_ok, profile, np.nan)
-    # smooth along depth (about one pixel) and differentiate: g > 0 where grey rises with depth
+    profile = row_mean(np.where(inside, values, np.nan))
+    return np.where(rows_ok, profile, np.nan)
+
+
+@dataclass
+class _StepProfile:
+    """A profile along depth, smoothed, its derivative ``g`` and the derivative's noise level."""
+
+    depths: np.ndarray
+    smooth: np.ndarray
+    g: np.ndarray
+    magnitude: np.ndarray
+    noise: float
+    step_d_px: float
+    d_expected: float
+
+    def _peaks(self, min_significance: float, min_slope: float) -> np.ndarray:
+        m = self.magnitude
+        return np.nonzero((m[1:-1] >= m[:-2]) & (m[1:-1] > m[2:]) & (m[1:-1] >= min_significance * self.noise)
+                          & (m[1:-1] >= min_slope))[0] + 1
+
+    def pick(self, min_significance, min_slope, inner, outer, outward) -> int | None:
+        """The runway's surface ends at ``d_expected`` (last row of runway, markings included):
+        its boundary is the outermost clear step from just inside that row to a little beyond
+        it; failing one there, the step nearest to it weighted by its strength."""
+        peaks = self._peaks(min_significance, min_slope)
+        if len(peaks) == 0:
+            return None
+        beyond = (self.depths[peaks] - self.d_expected) * outward
+        near = peaks[(beyond >= -inner) & (beyond <= outer) & (self.magnitude[peaks] >= 0.25 * self.magnitude[peaks].max())]
+        if len(near):
+            return int(near.max() if outward > 0 else near.min())
+        score = self.magnitude[peaks] * np.exp(-0.5 * ((self.depths[peaks] - self.d_expected) / (2.0 * inner)) ** 2)
+        return int(peaks[np.argmax(score)])
+
+    def pick_rising(self, min_significance, min_change, d_from, inner, outer, outward) -> int | None:
+        """The strongest step rising towards the outside from ``d_from - inner`` to
+        ``d_expected + outer``, if the profile changes by ``min_change`` across it."""
+        peaks = self._peaks(min_significance, 0.0)
+        peaks = peaks[np.sign(self.g[peaks]) == outward]
+        lo = (d_from - self.d_expected) * outward - inner
+        hi = max(outer, lo + 2.0 * inner)
+        beyond = (self.depths[peaks] - self.d_expected) * outward
+        peaks = peaks[(beyond >= lo) & (beyond <= hi)]
+        if len(peaks) == 0:
+            return None
+        chosen = int(peaks[np.argmax(self.magnitude[peaks])])
+        reach = max(1, int(round(2.0 / self.step_d_px)))
+        before = self.smooth[max(0, chosen - reach)]
+        after = self.smooth[min(len(self.smooth) - 1, chosen + reach)]
+        return chosen if (after - before) * outward >= min_change else None
+
+    def subpixel(self, chosen: int) -> float:
+        """Centroid of the step's derivative lobe within a pixel of its peak."""
+        half = max(1, int(round(1.0 / self.step_d_px)))
+        idx = np.arange(max(0, chosen - half), min(len(self.g), chosen + half + 1))
+        w = np.maximum(np.sign(self.g[chosen]) * self.g[idx], 0.0)
+        return float(np.sum(w * self.depths[idx]) / np.sum(w)) if w.sum() > 0 else float(self.depths[chosen])
+
+
+def _step_profile(profile, depths, step_d_px, d_expected, outward) -> _StepProfile | None:
+    """Smooth ``profile`` along depth (about one pixel), differentiate it (g > 0 where it rises
+    with depth) and measure the derivative's noise: the smaller of its spreads over the whole
+    window and over the part outside the runway (markings inside, or field boundaries beyond
+    the runway's end, are structure, not noise)."""
     valid = np.isfinite(profile)
+    if valid.sum() < 12:
+        return None
     filled = np.interp(depths, depths[valid], profile[valid])
     kernel = np.exp(-0.5 * (np.arange(-4, 5) * step_d_px / 0.8) ** 2)
     kernel /= kernel.sum()
@@ -195,43 +302,13 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     g[-5:] = 0.0
     g = np.where(valid, g, 0.0)
     magnitude = np.abs(g)
-    # the profile's noise: the smaller of the spreads over the whole window and over its part
-    # outside the runway (markings inside, or field boundaries beyond the runway's end, are
-    # structure, not noise)
+
     def spread(pool):
         return 1.4826 * float(np.median(np.abs(pool - np.median(pool)))) if pool.size >= 8 else math.inf
 
     outside = valid & ((depths > d_expected + 2.0) if outward > 0 else (depths < d_expected - 2.0))
     noise = min(spread(magnitude[valid]), spread(magnitude[outside])) + 1e-3
-    peaks = np.nonzero((magnitude[1:-1] >= magnitude[:-2]) & (magnitude[1:-1] > magnitude[2:])
-                       & (magnitude[1:-1] >= min_significance * noise)
-                       & (magnitude[1:-1] >= min_step * 0.25))[0] + 1
-    if len(peaks) == 0:
-        return None
-    # the runway's surface ends at ``d_expected`` (last row of runway, markings included): its
-    # boundary is the outermost clear step from just inside that row to a little beyond it;
-    # failing one there, the step nearest to it weighted by its strength
-    inner = max(1.5, 0.01 * d_expected)
-    width_s = abs(sd_right[0] - sd_left[0]) * d_expected / d_ref       # runway width along the horizon at d_expected
-    outer = max(2.5, 0.02 * d_expected, marking_fraction * width_s * d_expected / horizon.camera.fx + 1.0)
-    beyond = (depths[peaks] - d_expected) * outward
-    near = peaks[(beyond >= -inner) & (beyond <= outer) & (magnitude[peaks] >= 0.25 * magnitude[peaks].max())]
-    if len(near):
-        chosen = int(near.max() if outward > 0 else near.min())
-    else:
-        score = magnitude[peaks] * np.exp(-0.5 * ((depths[peaks] - d_expected) / (2.0 * inner)) ** 2)
-        chosen = int(peaks[np.argmax(score)])
-    # sub-pixel: centroid of the step's derivative lobe within a pixel of its peak
-    half = max(1, int(round(1.0 / step_d_px)))
-    idx = np.arange(max(0, chosen - half), min(len(g), chosen + half + 1))
-    w = np.maximum(np.sign(g[chosen]) * g[idx], 0.0)
-    depth = float(np.sum(w * depths[idx]) / np.sum(w)) if w.sum() > 0 else float(depths[chosen])
-    centre_point = horizon.pencil_point(s0, k_centre, depth)
-    line_h = np.cross(np.array([centre_point[0], centre_point[1], 1.0]), v2)
-    line_h = line_h / np.linalg.norm(line_h[:2])
-    return TransverseLine(line_h=line_h, corner_left_uv=_meet(line_h, line_left),
-                          corner_right_uv=_meet(line_h, line_right), depth_px=depth,
-                          step=float(g[chosen]), significance=float(magnitude[chosen] / noise))
+    return _StepProfile(depths, smooth, g, magnitude, noise, step_d_px, d_expected)
 
 
 def _horizon_parallel(horizon: HorizonFrame, depth: float) -> np.ndarray:

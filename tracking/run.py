@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from visland.folder import as_grey
 from visland.runway import CORNER_NAMES
 from visland.tracking.anchoring import AnchorObservation, detector_anchor_provider, labels_anchor_provider
 from visland.tracking.measurements import (designation_from_labels, measurement_columns, parse_designation,
@@ -58,19 +59,20 @@ def _attitude(inertial, index):
                     float(inertial.heading_rad[index]))
 
 
-def _frames(source):
-    """``(index, grey image or None, reason)`` in order, from a source with ``frames()`` or ``read_frame()``."""
+def _frames(source, gray: bool = True):
+    """``(index, image or None, reason)`` in order (grey, or RGB when not ``gray``), from a source
+    with ``frames()`` or ``read_frame()``."""
     if callable(getattr(source, "frames", None)):
-        yield from source.frames(gray=True)
+        yield from source.frames(gray=gray)
         return
     # decode a few frames ahead in threads (OpenCV releases the GIL while decoding)
     n = len(source)
     with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
-        pending = collections.deque(pool.submit(source.read_frame, i, True) for i in range(min(4, n)))
+        pending = collections.deque(pool.submit(source.read_frame, i, gray) for i in range(min(4, n)))
         for index in range(n):
             image, reason = pending.popleft().result()
             if index + len(pending) + 1 < n:
-                pending.append(pool.submit(source.read_frame, index + len(pending) + 1, True))
+                pending.append(pool.submit(source.read_frame, index + len(pending) + 1, gray))
             yield index, image, reason
 
 
@@ -149,10 +151,13 @@ def track_source(source, init: str | None = "labels", params: TrackerParams | No
     steps = [None] * n
     flagged = []
     analysis = 0.0
-    for index, image, reason in _frames(source):
+    # the detector takes colour frames (its chroma profile places the threshold); the tracker grey
+    colour = anchor == "detector"
+    for index, frame, reason in _frames(source, gray=not colour):
         if index < start:
             continue
         tic = time.perf_counter()
+        image = as_grey(frame)
         if index == start:
             if image is None:
                 raise ValueError(f"cannot designate on {reason}")
@@ -161,7 +166,7 @@ def track_source(source, init: str | None = "labels", params: TrackerParams | No
             steps[index] = tracker.skip(reason, frame_index=index)
             flagged.append((index, reason))
         else:
-            observation = provider(index, image) if provider is not None else None
+            observation = provider(index, frame) if provider is not None else None
             steps[index] = tracker.step(image, _attitude(inertial, index), observation, frame_index=index)
         analysis += time.perf_counter() - tic
         if progress is not None:

@@ -23,7 +23,7 @@ import numpy as np
 from visland.camera import CameraModel
 from visland.contracts import Table, read_frames_csv, read_labels, read_telemetry, read_truth
 
-__all__ = ["FrameFolder", "InertialAtFrames", "IMAGE_SUFFIXES", "interpolate_telemetry", "list_frame_files"]
+__all__ = ["FrameFolder", "InertialAtFrames", "IMAGE_SUFFIXES", "as_grey", "interpolate_telemetry", "list_frame_files"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
 
@@ -165,3 +165,12 @@ class FrameFolder:
         if not gray:
             image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
         return image, None
+
+
+def as_grey(image):
+    """``image`` as grey levels: unchanged when it is (H, W), converted from RGB when (H, W, 3);
+    None stays None."""
+    if image is None or image.ndim == 2:
+        return image
+    import cv2  # heavy import kept local: the core must start fast
+    return cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)

@@ -56,3 +56,30 @@ def edge_error_px(camera, labels, result, side: str) -> float:
     if not (math.isfinite(rho) and math.isfinite(theta)):
         return math.inf
     return float(np.abs(camera.line_distance_px(rho, theta, points)).max())
+
+
+@functools.lru_cache(maxsize=None)
+def colour_frame(name: str, distance_m: float, size: int = SIZE, seed: int = 1):
+    """``(rgb, camera, state, labels)``: a ray-cast frame whose grass is green and whose grey
+    levels alone are ambiguous.
+
+    The grass has the grey level (150) of the threshold and side stripes blended with the
+    asphalt within a pixel, so in grey levels the runway seems to end at the stripes' inner
+    edges. Colour is added with zero luminance (a runway-coverage mask, ray-cast the same way,
+    says where): converted to grey, the frame is the grey frame again.
+    """
+    camera = CameraModel.default(size)
+    state = state_at_distance(name, distance_m)
+    R = batch_R_camera_from_runway(state.roll_rad, state.pitch_rad, state.dpsi_rad, camera.mount_rpy_rad)[0]
+    scene = PaintedAirport(seed=seed, grass_grey=150.0, fields=False)
+    grey = draw_frame(scene, camera, state.p_runway_m[0], R, supersample=2, blur_sigma_px=0.4,
+                      rng=np.random.default_rng(seed))
+    mask_scene = PaintedAirport(seed=seed, grass_grey=0.0, runway_grey=255.0, marking_grey=255.0, fields=False,
+                                taxiway_offset_m=None, parallel_road_offset_m=None, crossing_road=False,
+                                haze_range_m=1e12)
+    runway = draw_frame(mask_scene, camera, state.p_runway_m[0], R, supersample=2, blur_sigma_px=0.4,
+                        noise_grey=0.0) / 255.0
+    tint = np.array([-18.0, 14.0, (18.0 * 0.299 - 14.0 * 0.587) / 0.114])     # R, G, B; luminance 0
+    rgb = np.clip(grey[..., None] + (1.0 - runway[..., None]) * tint, 0, 255).round().astype(np.uint8)
+    labels = ideal_features(state, get_scenario(name).runway, camera)
+    return rgb, camera, state, labels

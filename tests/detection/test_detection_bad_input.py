@@ -56,7 +56,8 @@ def test_airport_without_its_runway():
 @pytest.mark.parametrize("image, words", [
     (np.zeros((SIZE, SIZE + 8), np.uint8), ("camera",)),
     (np.zeros((SIZE, SIZE), np.float32), ("dtype",)),
-    (np.zeros((SIZE, SIZE, 3), np.uint8), ("shape",)),
+    (np.zeros((SIZE, SIZE, 4), np.uint8), ("shape",)),
+    (np.zeros((SIZE, SIZE, 3), np.uint8), ("contrast",)),        # a black RGB frame
     ([[0, 1], [2, 3]], ("list",)),
     (None, ("nonetype",)),
 ])

@@ -2,10 +2,11 @@
 ``raycast_airport``), against exact labels from the camera model and the flown trajectory."""
 import math
 
+import cv2
 import numpy as np
 import pytest
 
-from detection_frames import edge_error_px, frame
+from detection_frames import colour_frame, edge_error_px, frame
 from visland.contracts import MEASUREMENT_COLUMNS, read_measurements, write_csv
 from visland.detection import DetectorParams, detect_runway
 
@@ -84,3 +85,23 @@ def test_measurement_row_round_trips_through_the_contract(tmp_path):
     assert table["source"][0] == "detection"
     assert table["near_left_u_px"][0] == pytest.approx(found.corners_uv[0, 0], abs=1e-6)
     assert math.isnan(table["near_left_u_px"][1]) and table["reason"][1] == missing.reason
+
+
+@pytest.mark.parametrize("name, distance", [("thesis-1", 1500.0), ("thesis-1", 800.0), ("thesis-7", 1200.0)])
+def test_colour_places_the_threshold_and_edges_where_grey_levels_cannot(name, distance):
+    """Grass with the grey level of the blended stripes: the chroma finds the runway's outline."""
+    rgb, camera, state, labels = colour_frame(name, distance, size=SIZE)
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    errors = {}
+    for kind, image in (("colour", rgb), ("grey", cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY))):
+        result = detect_runway(image, camera, roll, pitch)
+        assert result.found, (kind, result.reason)
+        assert result.corners_found[:2].all(), (kind, result.reason)
+        errors[kind] = float(np.linalg.norm(result.corners_uv[:2] - labels.corners_uv[0, :2], axis=1).max())
+        if kind == "colour":
+            for side in ("left", "right"):
+                assert edge_error_px(camera, labels, result, side) < 0.3
+            assert abs(math.degrees(result.dpsi_rad - state.dpsi_rad[0])) < 0.05
+    assert errors["colour"] < 0.4
+    # what the chroma is for: in grey levels the corners sit on the stripes' inner edges
+    assert errors["grey"] > 2.0 * errors["colour"] + 0.3
