@@ -318,17 +318,31 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
         width = abs(width_slope) * depth / scale
         return np.clip(band_fraction * width, 2.0, halfwidth_px)
 
-    fit = refine_line(ctx.image, line, (t_lo, t_hi), "edge", polarity=0,
-                      halfwidth_px=band, n_samples=params.refine_samples,
-                      iterations=iterations or params.refine_iterations, min_contrast=params.min_contrast,
-                      outward=outward_s * sign, outward_reach_px=reach)
-    if fit is not None and ctx.colour is not None:
-        # grey pavement against coloured ground: the chroma step is the edge even where the side
-        # stripe, blended with the asphalt, has the grass's grey level
-        on_chroma = chroma_boundary(ctx.colour, fit, outward_s * sign,
-                                    float(np.max(reach(np.array(fit.extent) + (fit.line.point - line.point) @ line.direction))))
-        if on_chroma is not None:
-            fit = on_chroma
+    def refine(image):
+        return refine_line(image, line, (t_lo, t_hi), "edge", polarity=0,
+                           halfwidth_px=band, n_samples=params.refine_samples,
+                           iterations=iterations or params.refine_iterations, min_contrast=params.min_contrast,
+                           outward=outward_s * sign, outward_reach_px=reach)
+
+    fit = refine(ctx.image)
+    if ctx.colour is None:
+        return fit
+    # grey pavement against coloured ground: the chroma steps at the edge even where the side
+    # stripe, blended with the asphalt, has the grass's grey level (then the grey step is weak
+    # or sits on the stripe's inner edge)
+    if fit is None or fit.extent[1] - fit.extent[0] < 0.5 * (t_hi - t_lo):
+        on_chroma = refine(ctx.colour)
+        if on_chroma is not None and (fit is None or on_chroma.extent[1] - on_chroma.extent[0]
+                                      > fit.extent[1] - fit.extent[0]):
+            return on_chroma
+    if fit is not None:
+        t_fit = np.array(fit.extent) + (fit.line.point - line.point) @ line.direction
+        stripe_px = float(np.max(reach(t_fit))) - 1.5
+        # a side stripe 3 px wide or more is resolved and the grey boundary is already exact
+        if stripe_px < 3.0:
+            on_chroma = chroma_boundary(ctx.colour, fit, outward_s * sign, stripe_px + 1.5)
+            if on_chroma is not None:
+                fit = on_chroma
     return fit
 
 

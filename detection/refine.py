@@ -21,7 +21,7 @@ import cv2
 import numpy as np
 
 __all__ = ["PixelLine", "LineFit", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
-           "stripe_offsets", "fit_line", "refine_line", "chroma_boundary"]
+           "stripe_offsets", "fit_line", "refine_line", "chroma_boundary", "chroma_of"]
 
 _DERIVATIVE = np.array([-1.0, -2.0, 0.0, 2.0, 1.0]) / 8.0
 
@@ -98,6 +98,12 @@ class LineFit:
         return math.hypot(self.sigma_offset_px, t * self.sigma_angle_rad)
 
 
+def chroma_of(rgb: np.ndarray) -> np.ndarray:
+    """Chroma of a uint8 RGB image: largest minus smallest channel, (H, W) uint8 (0 for greys)."""
+    r, g, b = cv2.split(np.ascontiguousarray(rgb))
+    return cv2.subtract(cv2.max(cv2.max(r, g), b), cv2.min(cv2.min(r, g), b))
+
+
 def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: float,
                     step_px: float = 1.0, taps_px: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Grey-level (or chroma) profiles across a line.
@@ -146,7 +152,7 @@ def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: fl
     u1 = min(width, int(math.ceil(inside_u.max())) + 2)
     v1 = min(height, int(math.ceil(inside_v.max())) + 2)
     crop = image[v0:v1, u0:u1]
-    crop = np.asarray(crop.max(axis=2) - crop.min(axis=2) if crop.ndim == 3 else crop, dtype=np.float32)
+    crop = np.asarray(chroma_of(crop) if crop.ndim == 3 else crop, dtype=np.float32)
     map_u = np.where(outside, -10.0, map_u - u0).astype(np.float32)
     map_v = np.where(outside, -10.0, map_v - v0).astype(np.float32)
     values = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
@@ -591,7 +597,7 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
 
 
 def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float, min_change: float = 8.0,
-                    min_span: float = 0.6, n_samples: int = 200) -> LineFit | None:
+                    min_span: float = 0.6, n_samples: int = 64) -> LineFit | None:
     """Move a region's refined boundary (``fit``, from grey levels) onto its chroma boundary.
 
     A runway is grey pavement, white paint and rubber; grass and fields beside it are not grey.

@@ -31,7 +31,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame
 from visland.detection.pencil import finite_median, rectify, row_mean, row_quantile
-from visland.detection.refine import PixelLine
+from visland.detection.refine import PixelLine, chroma_of
 
 __all__ = ["TransverseLine", "find_transverse_line", "surface_extent"]
 
@@ -200,9 +200,7 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     chosen = grey.pick(min_significance, 0.25 * min_step, inner, outer, outward) if grey else None
     best = (grey, chosen) if chosen is not None else None
     if colour is not None:
-        patch = colour[v0:v1, u0:u1]
-        chroma = _step_profile(profile_of(patch.max(axis=2) - patch.min(axis=2)), depths, step_d_px,
-                               d_expected, outward)
+        chroma = _step_profile(profile_of(chroma_of(colour[v0:v1, u0:u1])), depths, step_d_px, d_expected, outward)
         if chroma is not None:
             # the boundary lies at or beyond the grey step (which may be the stripes' inner edge)
             d_from = depths[chosen] if chosen is not None else d_expected
