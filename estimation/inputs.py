@@ -10,7 +10,12 @@ What the observers need and how it is obtained (SPEC frames, see :mod:`visland.f
   and the estimate is their causal running mean (circular, each frame weighted by the squared
   pixel span of the threshold: the vanishing point sharpens as the runway grows in the image),
   so the heading deviation used at a step is ``dpsi = heading - psi_rwy_hat``, available at the
-  inertial rate and far less noisy than one frame's d_F.
+  inertial rate and far less noisy than one frame's d_F. The mean is used once its standard
+  error (weighted spread of the samples over the effective number of frames) is under
+  ``HEADING_SETTLED_RAD`` (1 deg): far away, a few pixels of noise on a runway 20 px wide can
+  put one frame's vanishing point 20 deg off, and an observer started on that heading turns
+  20 % of the speed into a false lateral velocity. Exact or detected d_F settles on the first
+  frame; until then the frames are "no heading deviation yet" and no observer starts.
 - Velocities in the runway axes R (= the virtual-frame axes V): ``v_R = Rz(-psi_rwy_hat) v_NED``;
   in camera axes ``v_C = R_camera_from_runway v_R``.
 - Camera angular velocity ``w_C = R_body_from_camera^T (p, q, r)``.
@@ -44,6 +49,8 @@ __all__ = ["InertialSeries", "FeatureSeries", "PreparedInputs", "prepare_inputs"
 
 #: Frame times within this of a telemetry sample share its step.
 TIME_MATCH_S = 1e-6
+#: The runway-heading estimate is used once its standard error is under this (radians).
+HEADING_SETTLED_RAD = math.radians(1.0)
 
 _NEAR_CORNERS = ("near_left", "near_right")
 _FAR_CORNERS = ("far_left", "far_right")
@@ -262,6 +269,25 @@ def _circular_running_mean(angles_rad: np.ndarray, weights: np.ndarray | None = 
     return np.where(total > 0, np.arctan2(s, c), np.nan)
 
 
+def _running_standard_error(angles_rad: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Causal standard error of the weighted running mean of ``angles_rad``:
+    sqrt(weighted variance / effective number of samples), NaN entries skipped; infinite
+    until two samples. Angles are taken relative to the first valid one (no wrap: the samples
+    are one constant heading plus noise far below pi)."""
+    valid = np.isfinite(angles_rad)
+    if not valid.any():
+        return np.full(len(angles_rad), np.inf)
+    w = np.where(valid & np.isfinite(weights), weights, 0.0)
+    x = np.where(valid, wrap_pi(angles_rad - angles_rad[np.argmax(valid)]), 0.0)
+    sw, swx, swxx, sww = np.cumsum(w), np.cumsum(w * x), np.cumsum(w * x * x), np.cumsum(w * w)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = swx / sw
+        variance = np.maximum(swxx / sw - mean ** 2, 0.0)
+        n_eff = sw ** 2 / sww
+        se = np.sqrt(variance / n_eff)
+    return np.where((np.cumsum(valid) >= 2) & np.isfinite(se), se, np.inf)
+
+
 def _heading_weights(near_uv_px: np.ndarray) -> np.ndarray:
     """Relative weight of each frame's d_F: the squared pixel span of the threshold (P'P'').
 
@@ -332,7 +358,11 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     has_dF = np.isfinite(dF_px)
     if has_dF.any():
         dpsi_frame[has_dF] = dpsi_from_dF(dF_px[has_dF], ins_f.roll_rad[has_dF], ins_f.pitch_rad[has_dF], camera)
-    psi_rwy_frame = _circular_running_mean(ins_f.heading_rad - dpsi_frame, _heading_weights(features.near_uv_px))
+    weights = _heading_weights(features.near_uv_px)
+    psi_samples = ins_f.heading_rad - dpsi_frame
+    psi_rwy_frame = _circular_running_mean(psi_samples, weights)
+    settled = np.maximum.accumulate(_running_standard_error(psi_samples, weights) <= HEADING_SETTLED_RAD)
+    psi_rwy_frame = np.where(settled, psi_rwy_frame, np.nan)
     # value at each step: the estimate from the frames up to that time (hold the last one)
     last_frame = np.searchsorted(frame_t, times + TIME_MATCH_S, side="right") - 1
     psi_rwy = np.where(last_frame >= 0, psi_rwy_frame[np.clip(last_frame, 0, None)], np.nan)

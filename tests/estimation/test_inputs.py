@@ -21,8 +21,11 @@ def test_ideal_inputs_match_the_geometry_of_the_flight():
     assert np.nanmax(np.abs(yv[ok] - true_virtual_points(result)[ok])) < 1e-9
     traj = result.trajectory
     v_runway = np.array([s.v_runway_mps for s in prep.steps])
-    assert np.abs(v_runway - traj.v_runway_mps[:len(v_runway)]).max() < 1e-9
-    assert np.abs(prep.dpsi_rad - traj.dpsi_rad[:len(prep)]).max() < 1e-9
+    assert np.abs(v_runway[2:] - traj.v_runway_mps[2:len(v_runway)]).max() < 1e-9
+    # the runway heading is used from the second frame on (two samples agree: standard error 0)
+    settled = np.isfinite(prep.dpsi_rad)
+    assert not settled[:2].any() and settled[2:].all()
+    assert np.abs(prep.dpsi_rad[2:] - traj.dpsi_rad[2:len(prep)]).max() < 1e-9
     # the camera-frame quantities from the true attitude and mounting
     k = 1000
     R_cr = R_camera_from_runway(traj.roll_rad[k], traj.pitch_rad[k], traj.dpsi_rad[k],
@@ -38,7 +41,8 @@ def test_steps_are_the_inertial_samples_with_a_measurement_every_other_one():
     prep = prepared()
     assert np.allclose(np.diff(prep.t_s), 0.02)
     measured = np.array([s.points_yv is not None for s in prep.steps])
-    assert measured[:20].tolist() == [True, False] * 10
+    # frame 0 waits for the runway heading (one sample says nothing of its noise)
+    assert measured[:20].tolist() == [False, False] + [True, False] * 9
 
 
 def test_frames_off_the_inertial_grid_get_their_own_step(tmp_path):
@@ -101,3 +105,21 @@ def test_telemetry_not_covering_the_frames_is_an_error():
     with pytest.raises(ValueError, match="NaN"):
         InertialSeries(inertial.t_s, inertial.roll_rad * math.nan, inertial.pitch_rad, inertial.heading_rad,
                        inertial.omega_body_rps, inertial.v_ned_mps)
+
+
+def test_runway_heading_waits_until_its_standard_error_is_under_a_degree():
+    from visland.estimation.inputs import HEADING_SETTLED_RAD, _running_standard_error
+    # samples +-0.1 rad about 1 rad, equal weights: standard error 0.1 / sqrt(n)
+    n = 200
+    samples = 1.0 + 0.1 * np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
+    se = _running_standard_error(samples, np.ones(n))
+    assert np.isinf(se[0])
+    even = np.arange(1, n, 2)                       # after an even count the mean is exact
+    assert np.allclose(se[even], 0.1 / np.sqrt(even + 1), rtol=1e-9)
+    first = int(np.argmax(se <= HEADING_SETTLED_RAD))
+    assert first + 1 >= (0.1 / HEADING_SETTLED_RAD) ** 2 - 1
+    # a heavier (nearer, larger) frame counts for more than one far one: n_eff = (sum w)^2 / sum w^2
+    se_w = _running_standard_error(np.array([0.0, 0.2]), np.array([1.0, 3.0]))
+    mean = 0.15
+    variance = (1.0 * mean ** 2 + 3.0 * (0.2 - mean) ** 2) / 4.0
+    assert se_w[1] == pytest.approx(np.sqrt(variance / (16.0 / 10.0)))
