@@ -226,6 +226,9 @@ class _PointsObserver(Observer):
 
     features = "points"
     params_type = PointsParams
+    #: dX, dY and the width from the observer's own corners (True) or, on frames that have
+    #: them, from the measured ones (the runner reads this)
+    deviations_from_own_points = True
 
     def _reset(self, first: ObserverInput, dh0_m: float, measurement: np.ndarray) -> None:
         self._y = [float(measurement[0, 0]), float(measurement[0, 1]), float(measurement[1, 0]),

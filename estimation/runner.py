@@ -99,7 +99,9 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
         coasting[f] = estimate.coasting
         reason[f] = estimate.reason if estimate.coasting else ""
         if observer.features == "points":
-            yv = observer.predicted_points_yv() if has_points else inp.points_yv
+            # the observer's own (filtered) corners, unless it says they lag the measured ones
+            own = has_points and not (inp.points_yv is not None and not observer.deviations_from_own_points)
+            yv = observer.predicted_points_yv() if own else inp.points_yv
             if yv is not None and not (np.isfinite(yv).all() and np.abs(yv).max() < _MAX_ABS_YV):
                 yv = inp.points_yv       # a diverged prediction: fall back on the measured points
             if yv is not None:
