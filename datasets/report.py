@@ -147,19 +147,25 @@ def _plots_estimates(estimates, truth, observers):
             if truth is None:
                 ax.set_visible(False)
                 continue
+            plotted = 0
             for k, observer in enumerate(members):
                 series = _observer_series(estimates, observer)
                 if not np.isfinite(series[column]).any():
                     continue
                 truth_at = np.interp(series["t_s"], truth["t_s"], truth[column])
                 ax.plot(series["t_s"], truth_at - series[column], color=f"C{k}", lw=0.8)
-            ax.set_yscale("symlog", linthresh=0.1)
+                plotted += 1
+            if not plotted:
+                ax.text(0.5, 0.5, f"{label} is not estimated from {group}", ha="center", va="center",
+                        transform=ax.transAxes, fontsize=8, color="0.4")
+            # linear within a metre: noise around zero stays a wiggle, transients show in decades
+            ax.set_yscale("symlog", linthresh=1.0)
             ax.axhline(0, color="k", lw=0.5)
             if col == 0:
                 ax.set_ylabel(f"{label} error (m)")
             if row == rows - 1:
                 ax.set_xlabel("t (s)")
-    fig.suptitle("estimates (top) and truth - estimate (symmetric log scale, linear within 0.1 m)", y=1.0)
+    fig.suptitle("estimates (top) and truth - estimate (symmetric log scale, linear within 1 m)", y=1.0)
     fig.tight_layout()
     return figure_to_data_uri(fig)
 
