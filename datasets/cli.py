@@ -49,7 +49,8 @@ def _headline(summary: dict) -> dict:
                 entry[f"{quantity}_mean_100ft_m"] = values.get("mean_err_100ft_m")
                 entry[f"{quantity}_std_100ft_m"] = values.get("std_err_100ft_m")
             out[source] = entry
-    return out
+    from visland.contracts import json_ready
+    return json_ready(out)                 # NaN (dX from lines) as null: valid JSON
 
 
 def _cmd_campaign(args) -> int:
@@ -68,11 +69,13 @@ def _cmd_demo(args) -> int:
     """The README's main job: a short campaign on one approach, then where to look."""
     import json
     from visland.datasets.campaign import CampaignOptions, run_campaign
-    options = CampaignOptions(scenarios=("thesis-1",), size=args.size, fps=args.fps,
+    options = CampaignOptions(scenarios=(args.scenario,), size=args.size, fps=args.fps,
                               sources=("detection", "tracking"), observers=_observers(["all"]),
-                              seed=0, workers=args.workers)
-    print(f"visland demo: thesis-1 (thesis Table 5.2 No.1) rendered at {args.size}x{args.size}, {args.fps:g} Hz; "
-          f"runway detection and point tracking; every observer. Output: {args.out}/")
+                              seed=0, workers=args.workers, prune_frames=not args.keep_frames,
+                              png_compression=0)
+    print(f"visland demo: {args.scenario} rendered at {args.size}x{args.size}, {args.fps:g} Hz; runway detection and "
+          f"point tracking; every observer. Output: {args.out}/"
+          + ("" if args.keep_frames else " (frames deleted once processed; --keep-frames keeps them)"))
     summary = run_campaign(options, args.out, force=args.force)
     print(json.dumps(_headline(summary)))
     return 0
@@ -146,10 +149,14 @@ def register(subparsers):
 
     p = subparsers.add_parser(
         "demo", help="the README's main job: one approach rendered, measured, estimated and compared",
-        description="Run a short campaign on thesis-1 (render, detect, track, every observer, compare) and "
+        description="Run a short campaign on one approach (render, detect, track, every observer, compare) and "
                     "print where the tables and the HTML reports are. Resumable like 'campaign'.")
     p.add_argument("--out", default="visland-demo", metavar="DIR", help="output folder (default ./visland-demo)")
-    p.add_argument("--size", type=int, default=1024, metavar="PX", help="image size (default 1024)")
+    p.add_argument("--scenario", default="thesis-3", metavar="NAME",
+                   help="scenario (default thesis-3: thesis Table 5.2 No.3, 4 km out, 51 s)")
+    p.add_argument("--size", type=int, default=2048, metavar="PX", help="image size (default 2048)")
+    p.add_argument("--keep-frames", action="store_true",
+                   help="keep the rendered frames (16 GB at 2048 px) instead of deleting them once processed")
     p.add_argument("--fps", type=float, default=25.0, help="frame rate (default 25)")
     p.add_argument("--workers", type=int, default=2, metavar="N", help="local rendering processes (default 2)")
     p.add_argument("--force", action="store_true", help="reuse a folder holding another campaign")
