@@ -33,7 +33,7 @@ Usage::
 
     python benchmarks/track_drift.py                                  # eight scenarios, full frames
     python benchmarks/track_drift.py --scenarios thesis-1 --crop      # quick
-    python benchmarks/track_drift.py --plot docs/tracking_drift.png
+    python benchmarks/track_drift.py --plot /tmp/tracking_drift.png
 
 Results are kept per scenario in ``--out`` (an ``.npz`` each): a rerun skips the scenarios
 already done unless ``--force``.
