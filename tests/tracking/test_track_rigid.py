@@ -28,6 +28,20 @@ def level_homography(roll_deg, pitch_deg, heading_deg, heading_reference_deg):
     return virtual_to_pixel_homography(R, CAMERA)
 
 
+def designated(uv0, G0):
+    """Level-frame coordinates of the pixels ``uv0`` designated in a frame with homography ``G0``."""
+    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
+    return q[:, :2] / q[:, 2:3]
+
+
+def two_views(ck=(-1200.0, 20.0, -70.0)):
+    """The common scene: all points designated 3 km out, seen again from ``ck``: ``(q, uvk, Gk)``."""
+    c0 = np.array([-3000.0, 100.0, -160.0])
+    uv0, uvk = view(c0, 0.0, 1.0, 3.0), view(np.asarray(ck), 1.0, 2.0, 1.0)
+    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
+    return designated(uv0, G0), uvk, Gk
+
+
 def test_ground_points_follow_the_closed_form_motion():
     runway_heading = 40.0
     c0, ck = np.array([-4000.0, 150.0, -220.0]), np.array([-1500.0, 40.0, -95.0])
@@ -36,8 +50,7 @@ def test_ground_points_follow_the_closed_form_motion():
     # level frame of the designation = runway axes turned by the heading at frame 0 (dpsi_0 = 5 deg)
     G0 = level_homography(2.0, 1.0, runway_heading + 5.0, runway_heading + 5.0)
     Gk = level_homography(-3.0, 2.5, runway_heading - 2.0, runway_heading + 5.0)
-    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
-    q = q[:, :2] / q[:, 2:3]
+    q = designated(uv0, G0)
     result = check_consistency(q, uvk, Gk, threshold_px=0.5)
     assert result.checked and result.decided and result.consistent.all()
     assert np.max(result.residual_px) < 1e-6
@@ -49,11 +62,7 @@ def test_ground_points_follow_the_closed_form_motion():
 
 
 def test_one_drifting_point_is_singled_out():
-    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-1200.0, 20.0, -70.0])
-    uv0, uvk = view(c0, 0.0, 1.0, 3.0), view(ck, 1.0, 2.0, 1.0)
-    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
-    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
-    q = q[:, :2] / q[:, 2:3]
+    q, uvk, Gk = two_views()
     drifted = uvk.copy()
     drifted[1] += [4.0, -3.0]                   # P'' slid 5 px
     result = check_consistency(q, drifted, Gk, threshold_px=2.0)
@@ -65,11 +74,8 @@ def test_one_drifting_point_is_singled_out():
 
 
 def test_two_points_that_disagree_cannot_be_told_apart():
-    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-1200.0, 20.0, -70.0])
-    uv0, uvk = view(c0, 0.0, 1.0, 3.0)[:2], view(ck, 1.0, 2.0, 1.0)[:2]
-    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
-    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(2)]).T).T
-    q = q[:, :2] / q[:, 2:3]
+    q, uvk, Gk = two_views()
+    q, uvk = q[:2], uvk[:2]
     ok = check_consistency(q, uvk, Gk, threshold_px=1.0)
     assert ok.checked and ok.decided and ok.consistent.all()
     drifted = uvk.copy()
@@ -79,11 +85,7 @@ def test_two_points_that_disagree_cannot_be_told_apart():
 
 
 def test_edge_points_may_slide_along_their_edge():
-    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-1200.0, 20.0, -70.0])
-    uv0, uvk = view(c0, 0.0, 1.0, 3.0), view(ck, 1.0, 2.0, 1.0)
-    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
-    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
-    q = q[:, :2] / q[:, 2:3]
+    q, uvk, Gk = two_views()
     # points 4 and 5 are edge points: their normals are across the edge lines through the corners
     normals = [None] * 4
     for near, far in ((0, 2), (1, 3)):
@@ -111,11 +113,8 @@ def test_too_few_equations_are_not_checked():
 def test_prediction_spread_matches_monte_carlo():
     """sigma^2 (A^T A)^-1 carried to the image equals the scatter of refits on noisy points."""
     from visland.tracking.rigid import _fit, prediction_std_px
-    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-450.0, 20.0, -30.0])
-    uv0, uvk = view(c0, 0.0, 1.0, 3.0)[:4], view(ck, 1.0, 2.0, 1.0)[:4]
-    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
-    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(4)]).T).T
-    q = q[:, :2] / q[:, 2:3]
+    q, uvk, Gk = two_views(ck=(-450.0, 20.0, -30.0))
+    q, uvk = q[:4], uvk[:4]
     keep = np.array([True, False, True, True])
     motion, information = _fit(q, uvk, Gk, [None] * 4, keep)
     predicted_std = prediction_std_px(motion, information, q[1:2], Gk, 0.2)[0]
@@ -129,11 +128,7 @@ def test_prediction_spread_matches_monte_carlo():
 def test_closed_form_leave_one_out_equals_refitting_without_the_point():
     """(I - H_i)^-1 e_i, the residual of point i against the others' fit, checked by refitting."""
     from visland.tracking.rigid import _blocks, _solve
-    c0, ck = np.array([-3000.0, 100.0, -160.0]), np.array([-1200.0, 20.0, -70.0])
-    uv0, uvk = view(c0, 0.0, 1.0, 3.0), view(ck, 1.0, 2.0, 1.0)
-    G0, Gk = level_homography(0.0, 1.0, 3.0, 3.0), level_homography(1.0, 2.0, 1.0, 3.0)
-    q = np.linalg.solve(G0, np.column_stack([uv0, np.ones(len(uv0))]).T).T
-    q = q[:, :2] / q[:, 2:3]
+    q, uvk, Gk = two_views()
     noisy = uvk + np.random.default_rng(4).normal(0.0, 0.7, uvk.shape)
     normals = [None] * 4 + [np.array([0.6, 0.8]), None]
     blocks = _blocks(q, noisy, Gk, normals)
