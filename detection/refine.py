@@ -570,25 +570,18 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         # keep the direction of travel of the prediction
         if new_line.direction @ current.direction < 0:
             new_line = PixelLine(new_line.point, -new_line.direction)
-        residuals = new_line.distance(points[inliers])
-        t_in = (points[inliers] - new_line.point) @ new_line.direction
         n_in = int(inliers.sum())
         if n_in < 3:
             return None
-        rms = float(np.sqrt(np.mean(residuals ** 2)))
-        spread = float(np.sum((t_in - t_in.mean()) ** 2))
+        rms, extent, sigma_offset, sigma_angle = _fit_statistics(new_line, points[inliers])
         t_profiles = (centres - new_line.point) @ new_line.direction
-        in_span = np.count_nonzero((t_profiles >= t_in.min() - 0.5) & (t_profiles <= t_in.max() + 0.5))
-        sigma_fit = max(rms, 0.05)
+        in_span = np.count_nonzero((t_profiles >= extent[0] - 0.5) & (t_profiles <= extent[1] + 0.5))
         found_polarity = int(polarity) if polarity else int(np.sign(np.median(
             _signed_step(profiles[inliers], offsets))) or 1)
         result = LineFit(
             line=new_line, residual_px=rms, support=n_in / max(in_span, 1),
-            contrast=float(np.median(contrast[inliers])), polarity=found_polarity,
-            extent=(float(t_in.min()), float(t_in.max())),
-            sigma_offset_px=sigma_fit / math.sqrt(n_in),
-            sigma_angle_rad=sigma_fit / math.sqrt(spread) if spread > 0 else math.inf,
-            n_inliers=n_in, points=points[inliers])
+            contrast=float(np.median(contrast[inliers])), polarity=found_polarity, extent=extent,
+            sigma_offset_px=sigma_offset, sigma_angle_rad=sigma_angle, n_inliers=n_in, points=points[inliers])
         # the next pass samples the same span around the fitted line, in a narrower band
         t = t_profiles
         current = new_line
@@ -653,17 +646,26 @@ def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float, min_cha
     new_line, inliers, _ = fitted
     if new_line.direction @ line.direction < 0:
         new_line = PixelLine(new_line.point, -new_line.direction)
-    t_in = (points[inliers] - new_line.point) @ new_line.direction
-    if inliers.sum() < 3 or np.ptp(t_in) < min_span * (t1 - t0):
+    if inliers.sum() < 3:
         return None
-    residuals = new_line.distance(points[inliers])
-    rms = max(float(np.sqrt(np.mean(residuals ** 2))), 0.05)
-    spread = float(np.sum((t_in - t_in.mean()) ** 2))
-    return LineFit(line=new_line, residual_px=rms, support=fit.support, contrast=fit.contrast, polarity=fit.polarity,
-                   extent=(float(t_in.min()), float(t_in.max())),
-                   sigma_offset_px=rms / math.sqrt(int(inliers.sum())),
-                   sigma_angle_rad=rms / math.sqrt(spread) if spread > 0 else math.inf,
+    rms, extent, sigma_offset, sigma_angle = _fit_statistics(new_line, points[inliers])
+    if extent[1] - extent[0] < min_span * (t1 - t0):
+        return None
+    return LineFit(line=new_line, residual_px=max(rms, 0.05), support=fit.support, contrast=fit.contrast,
+                   polarity=fit.polarity, extent=extent, sigma_offset_px=sigma_offset, sigma_angle_rad=sigma_angle,
                    n_inliers=int(inliers.sum()), points=points[inliers])
+
+
+def _fit_statistics(line: PixelLine, points: np.ndarray, min_sigma_px: float = 0.05):
+    """``(rms, extent, sigma_offset_px, sigma_angle_rad)`` of a line fitted to its inlying
+    ``points``: RMS distance, span ``(t_min, t_max)`` along the line from ``line.point``, and the
+    one-sigma offset and angle uncertainties from the RMS (floored at ``min_sigma_px``)."""
+    rms = float(np.sqrt(np.mean(line.distance(points) ** 2)))
+    t_in = (points - line.point) @ line.direction
+    spread = float(np.sum((t_in - t_in.mean()) ** 2))
+    sigma = max(rms, min_sigma_px)
+    return (rms, (float(t_in.min()), float(t_in.max())), sigma / math.sqrt(len(points)),
+            sigma / math.sqrt(spread) if spread > 0 else math.inf)
 
 
 def _net_step(profiles: np.ndarray, offsets: np.ndarray, position: np.ndarray, outward: int,
