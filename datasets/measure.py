@@ -165,7 +165,8 @@ class _TeeSource:
             item = self._frames.get()
             if item is None:
                 return
-            yield (item[0], as_grey(item[1]), item[2]) if gray else item
+            index, colour, reason, grey = item
+            yield (index, grey if grey is not None else as_grey(colour), reason) if gray else (index, colour, reason)
 
 
 def measure_many(source, kinds, init=None, quiet: bool = False) -> dict:
@@ -197,8 +198,12 @@ def measure_many(source, kinds, init=None, quiet: bool = False) -> dict:
     threads = [threading.Thread(target=consume, args=(k,), daemon=True) for k in imaging]
     for thread in threads:
         thread.start()
+    # colour is decoded once; the grey levels the point trackers read are converted once too
+    # (detection, anchored tracking included, reads colour)
+    want_grey = any(parse_source(k)[0] == "tracking" for k in imaging)
     try:
-        for item in source.frames(gray=False):         # colour once; consumers wanting grey convert
+        for index, image, reason in source.frames(gray=False):
+            item = (index, image, reason, as_grey(image) if want_grey else None)
             for k in imaging:
                 queues[k].put(item)
     finally:
