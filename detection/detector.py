@@ -36,6 +36,7 @@ from visland.detection.result import DetectionResult, not_found
 from visland.detection.transverse import find_transverse_line, surface_extent
 from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
+from visland.folder import as_grey
 
 __all__ = ["detect_runway", "check_frame"]
 
@@ -101,7 +102,7 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
         return fail(problem)
     colour = None
     if image.ndim == 3:
-        colour, image = image, cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+        colour, image = image, as_grey(image)
     roll, pitch = _as_float(roll_rad), _as_float(pitch_rad)
     if not (math.isfinite(roll) and math.isfinite(pitch)):
         return fail(f"attitude is not finite (roll {roll_rad!r}, pitch {pitch_rad!r})")

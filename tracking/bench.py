@@ -20,6 +20,7 @@ import numpy as np
 
 from visland.camera import CameraModel
 from visland.features import batch_R_camera_from_runway
+from visland.folder import as_grey
 from visland.runway import CORNER_NAMES
 from visland.scenarios import get_scenario
 from visland.simulate import SimulationOptions, run_simulation
@@ -42,11 +43,10 @@ def _frames(source: str, camera, scenario, states, indices):
         for k in indices:
             images.append(render_planar(scene, camera, R[k], states.p_runway_m[k]))
         return images
-    import cv2
     from visland.render import FrameRenderer, SceneParams
     with FrameRenderer(SceneParams(), camera, scenario.runway) as renderer:
         for k in indices:
-            images.append(cv2.cvtColor(renderer.render(states.p_runway_m[k], R[k]), cv2.COLOR_RGB2GRAY))
+            images.append(as_grey(renderer.render(states.p_runway_m[k], R[k])))
     return images
 
 
