@@ -90,10 +90,6 @@ class CampaignOptions:
         return data
 
 
-def _dataset_ready(folder: Path) -> bool:
-    return (folder / "manifest.json").exists()
-
-
 def _run_is_current(run_dir: Path, dataset: Path, source: str, observers: tuple) -> bool:
     info = run_dir / "run.json"
     if not info.exists():
