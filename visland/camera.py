@@ -14,12 +14,18 @@ Conventions (stated once here; SPEC.md "Conventions"):
   line are near-vertical in the image, so their ``theta`` stays near 0, far from the wrap.
   Pixel-space Hough lines ``u cos(t) + v sin(t) = r`` are converted at the boundary with
   :meth:`CameraModel.line_from_pixel_hough` / :meth:`CameraModel.line_to_pixel_hough`.
+- Lens distortion (optional, ``camera.json`` ``"distortion": [k1, k2, p1, p2, k3]``): OpenCV's
+  radial-tangential model. Every feature visland reads or writes (labels, measurements, lines,
+  d_F) is in the *undistorted* pinhole image of the same ``fx, fy, cx, cy``: a distorted pixel
+  ``(u_d, v_d)`` of a frame corresponds to the pinhole pixel :meth:`CameraModel.undistort_pixels`
+  gives, and a frame is turned into its pinhole image with :meth:`CameraModel.undistortion_maps`
+  (for ``cv2.remap``). Without distortion the two images are the same.
 """
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -34,7 +40,11 @@ __all__ = [
     "wrap_line_chart",
     "line_through_points",
     "intersect_lines",
+    "DISTORTION_NAMES",
 ]
+
+#: OpenCV's order of the radial-tangential distortion coefficients in ``camera.json``.
+DISTORTION_NAMES = ("k1", "k2", "p1", "p2", "k3")
 
 DEFAULT_IMAGE_SIZE = 2048
 DEFAULT_FOCAL_PX = 2472.0
@@ -58,6 +68,10 @@ class CameraModel:
     mount_rpy_rad : tuple of 3 float
         Camera attitude relative to the body, ``(roll, pitch, yaw)`` applied ZYX;
         ``(0, 0, 0)`` looks along body x, negative pitch looks down.
+    distortion : tuple of 5 float or None
+        OpenCV radial-tangential coefficients ``(k1, k2, p1, p2, k3)`` of the lens, or None for
+        a pinhole lens. Features are always expressed in the undistorted pinhole image (module
+        docstring).
     """
 
     width: int = DEFAULT_IMAGE_SIZE
@@ -68,6 +82,7 @@ class CameraModel:
     cy: float = (DEFAULT_IMAGE_SIZE - 1) / 2.0
     mount_rpy_rad: tuple = field(
         default=tuple(math.radians(a) for a in DEFAULT_MOUNT_RPY_DEG))
+    distortion: tuple | None = None
 
     def __post_init__(self):
         for name in ("width", "height"):
@@ -86,6 +101,7 @@ class CameraModel:
         if len(mount) != 3 or not all(math.isfinite(a) and abs(a) <= math.pi for a in mount):
             raise ValueError(f"camera mount_rpy_rad must be 3 finite angles within +-pi, got {self.mount_rpy_rad!r}")
         object.__setattr__(self, "mount_rpy_rad", mount)
+        object.__setattr__(self, "distortion", _checked_distortion(self.distortion, "camera distortion"))
         object.__setattr__(self, "width", int(self.width))
         object.__setattr__(self, "height", int(self.height))
         object.__setattr__(self, "fx", float(self.fx))
@@ -104,10 +120,38 @@ class CameraModel:
         return cls(int(size), int(size), focal, focal, centre, centre,
                    tuple(math.radians(a) for a in mount_rpy_deg))
 
+    @classmethod
+    def from_fov(cls, width: int, height: int, hfov_deg: float,
+                 mount_rpy_deg=DEFAULT_MOUNT_RPY_DEG, distortion=None) -> "CameraModel":
+        """Square-pixel camera of a horizontal field of view ``hfov_deg`` (any frame shape).
+
+        ``fx = fy = (width / 2) / tan(hfov / 2)``, principal point at the image centre.
+        """
+        if not (isinstance(hfov_deg, (int, float)) and math.isfinite(hfov_deg) and 1.0 <= hfov_deg <= 170.0):
+            raise ValueError(f"hfov_deg must be a field of view between 1 and 170 deg, got {hfov_deg!r}")
+        for name, value in (("width", width), ("height", height)):
+            if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 16:
+                raise ValueError(f"{name} must be an integer of at least 16 px, got {value!r}")
+        focal = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
+        return cls(int(width), int(height), focal, focal, (width - 1) / 2.0, (height - 1) / 2.0,
+                   tuple(math.radians(a) for a in mount_rpy_deg), distortion)
+
     def with_mount(self, mount_rpy_rad) -> "CameraModel":
-        """Same intrinsics, another mounting (e.g. to apply a calibration error)."""
-        return CameraModel(self.width, self.height, self.fx, self.fy, self.cx, self.cy,
-                           tuple(mount_rpy_rad))
+        """Same intrinsics and lens, another mounting (e.g. to apply a calibration error)."""
+        return replace(self, mount_rpy_rad=tuple(mount_rpy_rad))
+
+    def without_distortion(self) -> "CameraModel":
+        """The pinhole camera of the same intrinsics: the image features are expressed in."""
+        return replace(self, distortion=None)
+
+    @property
+    def has_distortion(self) -> bool:
+        return self.distortion is not None and any(c != 0.0 for c in self.distortion)
+
+    @property
+    def hfov_deg(self) -> float:
+        """Horizontal field of view of the pinhole image, degrees."""
+        return math.degrees(math.atan((self.cx + 0.5) / self.fx) + math.atan((self.width - 0.5 - self.cx) / self.fx))
 
     @property
     def mount_rpy_deg(self) -> tuple:
@@ -124,9 +168,12 @@ class CameraModel:
 
     # ----------------------------------------------------------------- JSON
     def to_json_dict(self) -> dict:
-        """The ``camera.json`` content of SPEC.md (angles in degrees)."""
-        return {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy,
+        """The ``camera.json`` content of SPEC.md (angles in degrees; ``distortion`` if any)."""
+        data = {"width": self.width, "height": self.height, "fx": self.fx, "fy": self.fy,
                 "cx": self.cx, "cy": self.cy, "mount_rpy_deg": list(self.mount_rpy_deg)}
+        if self.distortion is not None:
+            data["distortion"] = list(self.distortion)
+        return data
 
     @classmethod
     def from_json_dict(cls, data: dict, source: str = "camera.json") -> "CameraModel":
@@ -150,9 +197,13 @@ class CameraModel:
                 or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a)
                            for a in mount)):
             raise ValueError(f"{source}: field 'mount_rpy_deg' must be a list of 3 numbers [roll, pitch, yaw], got {mount!r}")
+        distortion = data.get("distortion")
+        if distortion is not None:
+            distortion = _checked_distortion(distortion, f"{source}: field 'distortion'")
         try:
             return cls(int(data["width"]), int(data["height"]), float(data["fx"]), float(data["fy"]),
-                       float(data["cx"]), float(data["cy"]), tuple(math.radians(a) for a in mount))
+                       float(data["cx"]), float(data["cy"]), tuple(math.radians(a) for a in mount),
+                       distortion)
         except ValueError as error:
             raise ValueError(f"{source}: {error}") from None
 
@@ -199,6 +250,67 @@ class CameraModel:
         xy = np.where(in_front[..., None], xy, np.nan)
         return self.normalized_to_pixels(xy), in_front
 
+    # ----------------------------------------------------------------- lens distortion
+    def distort_normalized(self, xy) -> np.ndarray:
+        """Pinhole normalised coordinates ``(..., 2)`` to distorted normalised coordinates.
+
+        OpenCV's model: with ``r2 = x^2 + y^2`` and ``g = 1 + k1 r2 + k2 r2^2 + k3 r2^3``,
+        ``x_d = x g + 2 p1 x y + p2 (r2 + 2 x^2)``, ``y_d = y g + p1 (r2 + 2 y^2) + 2 p2 x y``.
+        """
+        xy = np.asarray(xy, dtype=float)
+        if not self.has_distortion:
+            return xy.copy()
+        k1, k2, p1, p2, k3 = self.distortion
+        x, y = xy[..., 0], xy[..., 1]
+        r2 = x * x + y * y
+        radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        x_d = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
+        y_d = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
+        return np.stack([x_d, y_d], axis=-1)
+
+    def undistort_normalized(self, xy_distorted, iterations: int = 30) -> np.ndarray:
+        """Inverse of :meth:`distort_normalized` (Newton iterations with a numerical Jacobian).
+
+        Converges to 1e-12 inside the lens's monotonic zone; points where the model folds over
+        (far outside the field of view of a strongly distorted lens) come back NaN.
+        """
+        target = np.asarray(xy_distorted, dtype=float)
+        if not self.has_distortion:
+            return target.copy()
+        xy = target.copy()
+        step = 1e-7
+        for _ in range(iterations):
+            residual = self.distort_normalized(xy) - target
+            if np.nanmax(np.abs(residual), initial=0.0) < 1e-13:
+                break
+            jx = (self.distort_normalized(xy + [step, 0.0]) - self.distort_normalized(xy - [step, 0.0])) / (2 * step)
+            jy = (self.distort_normalized(xy + [0.0, step]) - self.distort_normalized(xy - [0.0, step])) / (2 * step)
+            det = jx[..., 0] * jy[..., 1] - jy[..., 0] * jx[..., 1]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                dx = (jy[..., 1] * residual[..., 0] - jy[..., 0] * residual[..., 1]) / det
+                dy = (jx[..., 0] * residual[..., 1] - jx[..., 1] * residual[..., 0]) / det
+            xy = xy - np.stack([dx, dy], axis=-1)
+        residual = np.abs(self.distort_normalized(xy) - target).max(axis=-1)
+        return np.where((residual < 1e-9)[..., None], xy, np.nan)
+
+    def distort_pixels(self, uv) -> np.ndarray:
+        """Pinhole (undistorted) pixels ``(..., 2)`` to the pixels of the real, distorted frame."""
+        return self.normalized_to_pixels(self.distort_normalized(self.pixels_to_normalized(uv)))
+
+    def undistort_pixels(self, uv_distorted) -> np.ndarray:
+        """Pixels of the real, distorted frame ``(..., 2)`` to pinhole (undistorted) pixels."""
+        return self.normalized_to_pixels(self.undistort_normalized(self.pixels_to_normalized(uv_distorted)))
+
+    def undistortion_maps(self) -> tuple[np.ndarray, np.ndarray]:
+        """``cv2.remap`` maps (float32, shape (height, width)) from the frame to its pinhole image.
+
+        ``pinhole[v, u] = frame[map_v[v, u], map_u[v, u]]``: each pinhole pixel is looked up at
+        its distorted position. Same size and intrinsics as the frame.
+        """
+        v, u = np.mgrid[0:self.height, 0:self.width].astype(float)
+        uv_distorted = self.distort_pixels(np.stack([u, v], axis=-1))
+        return uv_distorted[..., 0].astype(np.float32), uv_distorted[..., 1].astype(np.float32)
+
     def in_image(self, uv, margin_px: float = 0.0) -> np.ndarray:
         """True where pixel coordinates lie inside the image (``margin_px`` inside the border)."""
         uv = np.asarray(uv, dtype=float)
@@ -239,6 +351,23 @@ class CameraModel:
         r_px, t_px = self.line_to_pixel_hough(rho, theta_rad)
         uv = np.asarray(uv, dtype=float)
         return uv[..., 0] * np.cos(t_px) + uv[..., 1] * np.sin(t_px) - r_px
+
+
+def _checked_distortion(value, what: str):
+    """``None`` or a tuple of the 5 OpenCV coefficients; one sentence naming ``what`` otherwise."""
+    if value is None:
+        return None
+    if (not isinstance(value, (list, tuple, np.ndarray)) or len(value) != len(DISTORTION_NAMES)
+            or not all(isinstance(c, (int, float, np.floating)) and not isinstance(c, bool) and math.isfinite(c)
+                       for c in value)):
+        raise ValueError(f"{what} must be a list of 5 finite numbers [k1, k2, p1, p2, k3] (OpenCV order), got {value!r}")
+    coefficients = tuple(float(c) for c in value)
+    limits = (("k1", 2.0), ("k2", 5.0), ("p1", 0.1), ("p2", 0.1), ("k3", 10.0))
+    for c, (name, limit) in zip(coefficients, limits):
+        if abs(c) > limit:
+            raise ValueError(f"{what}: {name} = {c:g} is outside +-{limit:g} (not a lens distortion in "
+                             f"OpenCV's normalised units; were pixel units or another model used?)")
+    return coefficients
 
 
 def wrap_line_chart(rho, theta_rad) -> tuple[np.ndarray, np.ndarray]:
