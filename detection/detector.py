@@ -36,7 +36,7 @@ from visland.detection.result import DetectionResult, not_found
 from visland.detection.transverse import find_transverse_line, surface_extent
 from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
-from visland.folder import as_grey
+from visland.folder import as_grey, pinhole_frame
 
 __all__ = ["detect_runway", "check_frame"]
 
@@ -62,7 +62,9 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     Parameters
     ----------
     image : ndarray of uint8, shape (H, W) or (H, W, 3)
-        The frame, grey levels or RGB; its size must be the camera's. Everything runs on grey
+        The frame as the camera took it, grey levels or RGB; its size must be the camera's.
+        With a lens distortion in ``camera`` it is resampled to the pinhole image first
+        (:func:`visland.folder.pinhole_frame`); every feature is in pinhole pixels. Everything runs on grey
         levels; colour adds the chroma profile that places the threshold and the runway end
         where grass meets grey pavement (:mod:`visland.detection.transverse`).
     camera : CameraModel
@@ -100,6 +102,9 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     problem = check_frame(image, camera)
     if problem:
         return fail(problem)
+    # features are measured in the pinhole image (SPEC): a frame through a distorting lens is
+    # resampled first
+    image = pinhole_frame(image, camera)
     colour = None
     if image.ndim == 3:
         colour, image = image, as_grey(image)
@@ -493,8 +498,10 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     k_r_vp = (s0_r + k_r * d_mid - s0_vp) / d_mid
     extent = surface_extent(ctx.image, horizon, s0_vp, k_l_vp, k_r_vp, (d_far, d_near), (1.0, bottom_depth))
     d_near_expected, d_far_expected = d_near, d_far
+    surface_level = math.nan
     if extent is not None:
         d_far_expected, d_near_expected = extent
+        surface_level = extent.level
 
     def window(depth):
         half = max(8.0, 0.5 * params.threshold_search_fraction * depth_span, 0.1 * depth)
@@ -509,10 +516,13 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     else:
         near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                     d_near_expected, window(d_near_expected), outward=1, min_step=min_step,
-                                    colour=ctx.colour)
-    if near is None:
+                                    colour=ctx.colour, surface_level=surface_level)
+    if near is not None and not near.spans:
+        notes.append("threshold withheld: the transverse step found does not span the runway's width")
+        near = None
+    elif near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
-    else:
+    if near is not None:
         threshold_line = _line_chart(camera, near.line_h)
         for index, uv in ((0, near.corner_left_uv), (1, near.corner_right_uv)):
             if camera.in_image(uv, margin_px=0.0):
@@ -521,10 +531,13 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         if not corners_found[:2].all():
             notes.append("a threshold corner lies outside the image")
     far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
-                               window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour)
-    if far is None:
+                               window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour,
+                               surface_level=surface_level)
+    if far is not None and not far.spans:
+        notes.append("runway end withheld: the transverse step found does not span the runway's width")
+    elif far is None:
         notes.append("runway end not found")
-    else:
+    if far is not None and far.spans:
         end_line = _line_chart(camera, far.line_h)
         for index, uv in ((2, far.corner_left_uv), (3, far.corner_right_uv)):
             if camera.in_image(uv, margin_px=0.0):

@@ -33,7 +33,18 @@ from visland.detection.horizon import HorizonFrame
 from visland.detection.pencil import finite_median, rectify, row_mean, row_quantile
 from visland.detection.refine import PixelLine, chroma_of
 
-__all__ = ["TransverseLine", "find_transverse_line", "surface_extent"]
+__all__ = ["TransverseLine", "SurfaceExtent", "find_transverse_line", "surface_extent"]
+
+
+class SurfaceExtent(tuple):
+    """``(d_far, d_near)``: depths where the runway's surface ends; ``.level``: the surface's own
+    grey level between its markings (the lower quartile across a dark runway, the upper one
+    across a bright one), read where both edges are well supported."""
+
+    def __new__(cls, d_far: float, d_near: float, level: float):
+        extent = super().__new__(cls, (float(d_far), float(d_near)))
+        extent.level = float(level)
+        return extent
 
 
 @dataclass(frozen=True)
@@ -52,6 +63,12 @@ class TransverseLine:
         Grey-level step across it (runway side minus outside).
     significance : float
         The step's slope over the profile's noise level.
+    method : str
+        ``"ground-exit"`` (the outermost departure from the ground's level, grey levels),
+        ``"grey"`` (the strongest step near the surface's end), or ``"chroma"``.
+    spans : bool
+        Whether the step is found at the same depth in each third of the runway's width (a
+        marking or a pavement beside the runway does not span it).
     """
 
     line_h: np.ndarray
@@ -60,11 +77,13 @@ class TransverseLine:
     depth_px: float
     step: float
     significance: float
+    method: str = "grey"
+    spans: bool = True
 
 
 def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_right: float,
                    d_support: tuple, d_window: tuple, step_d_px: float = 0.5,
-                   marking_fraction: float = 1.2, max_rows: int = 800) -> tuple[float, float] | None:
+                   marking_fraction: float = 1.2, max_rows: int = 800) -> SurfaceExtent | None:
     """Depths ``(d_far, d_near)`` where the runway's surface ends, from rows of the frame
     resampled on lines through the vanishing point.
 
@@ -88,37 +107,73 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
         return None
     f = (rect.k - k_left) / width
     inside = (f >= 0.1) & (f <= 0.9)
-    outside = ((f >= -0.38) & (f <= -0.12)) | ((f >= 1.12) & (f <= 1.38))
+    beside = (((f >= -0.38) & (f <= -0.12)), ((f >= 1.12) & (f <= 1.38)))
     with np.errstate(invalid="ignore"):
-        out_level = row_quantile(rect.values[:, outside], 0.5)
+        # the ground beside each edge separately: a taxiway joining one side makes that side
+        # paved for a while, the other side still tells the runway from its surroundings
+        out_levels = [row_quantile(rect.values[:, side], 0.5) for side in beside]
         low = row_quantile(rect.values[:, inside], 0.25)
         high = row_quantile(rect.values[:, inside], 0.75)
     core = (rect.d >= d_support[0] + 0.2 * (d_support[1] - d_support[0])) & \
         (rect.d <= d_support[1] - 0.2 * (d_support[1] - d_support[0]))
     if core.sum() < 2:
         return None
+    out_level = row_mean(np.stack(out_levels, axis=1))          # both sides (a band's reference)
     darker = finite_median(low[core] - out_level[core]) < 0
-    contrast = (low - out_level) if darker else (high - out_level)
-    reference = finite_median(contrast[core])
-    if not np.isfinite(reference) or abs(reference) < 2.0:
+    surface = low if darker else high
+    runway = np.zeros(len(rect.d), dtype=bool)
+    references = []
+    for level in out_levels:
+        contrast = surface - level
+        reference_side = finite_median(contrast[core])
+        if np.isfinite(reference_side) and abs(reference_side) >= 2.0 and (reference_side < 0) == darker:
+            runway |= np.nan_to_num(contrast * np.sign(reference_side)) > 0.5 * abs(reference_side)
+            references.append(reference_side)
+    if not references:
         return None
-    runway = np.nan_to_num(contrast * np.sign(reference)) > 0.5 * abs(reference)
+    reference = float(np.median(references))
     # majority over three rows, then the run of runway rows holding the core
     padded = np.concatenate([[runway[0]], runway, [runway[-1]]]).astype(int)
     runway = (padded[:-2] + padded[1:-1] + padded[2:]) >= 2
     centre = int(np.nonzero(core)[0][len(np.nonzero(core)[0]) // 2])
     if not runway[centre]:
         return None
-    lo = centre
-    while lo > 0 and runway[lo - 1]:
-        lo -= 1
-    hi = centre
-    while hi < len(runway) - 1 and runway[hi + 1]:
-        hi += 1
+    fx = horizon.camera.fx
+    # a pavement crossing the runway (both sides paved for its width) interrupts the run: a
+    # gap shorter than a runway width along the runway is bridged when runway rows whose
+    # surface has the runway's own level resume after it
+    surface_level = finite_median(surface[core])
+    same_surface = np.abs(np.nan_to_num(surface - surface_level, nan=np.inf)) < 0.5 * abs(reference)
+
+    def gap_limit(depth):
+        return width * depth * depth / fx
+
+    def extend(index, direction):
+        while True:
+            nxt = index + direction
+            while 0 <= nxt < len(runway) and runway[nxt]:
+                index, nxt = nxt, nxt + direction
+            # a gap: does the runway resume within a runway width?
+            limit = gap_limit(rect.d[index])
+            j = nxt
+            while 0 <= j < len(runway) and not runway[j] and abs(rect.d[j] - rect.d[index]) <= limit:
+                j += direction
+            resumes = 0 <= j < len(runway) and runway[j] and abs(rect.d[j] - rect.d[index]) <= limit
+            if not resumes:
+                return index
+            # the resumed stretch must be runway surface, and long enough not to be a marking
+            k = j
+            while 0 <= k + direction < len(runway) and runway[k + direction]:
+                k += direction
+            if not (same_surface[min(j, k):max(j, k) + 1].mean() > 0.6 and abs(k - j) >= 3):
+                return index
+            index = k
+
+    lo = extend(centre, -1)
+    hi = extend(centre, +1)
     # then across a band of blended markings (grey level on the other side of the ground's)
     median = row_quantile(rect.values[:, inside], 0.5)
     band = np.nan_to_num((median - out_level) * -np.sign(reference)) > 0.5 * abs(reference)
-    fx = horizon.camera.fx
 
     def reach(depth):
         return marking_fraction * width * depth * depth / fx + 1.0
@@ -129,7 +184,7 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     start = rect.d[lo]
     while lo > 0 and band[lo - 1] and start - rect.d[lo - 1] <= reach(start):
         lo -= 1
-    return float(rect.d[lo]), float(rect.d[hi])
+    return SurfaceExtent(rect.d[lo], rect.d[hi], surface_level)
 
 
 def _meet(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:
@@ -142,7 +197,8 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
                          d_expected: float, d_window: tuple, outward: int, min_step: float,
                          n_columns: int = 48, step_d_px: float = 0.5,
                          min_significance: float = 2.5, marking_fraction: float = 1.2,
-                         colour=None, min_chroma_step: float = 8.0) -> TransverseLine | None:
+                         colour=None, min_chroma_step: float = 8.0,
+                         surface_level: float = math.nan) -> TransverseLine | None:
     """Locate the threshold (``outward = +1``: outside is at larger depth) or the runway end
     (``outward = -1``) near depth ``d_expected`` within ``d_window = (d_min, d_max)``.
 
@@ -157,6 +213,11 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     docstring): its step, rising towards the outside, replaces the grey one when the chroma
     differs by at least ``min_chroma_step`` levels across it and it lies between the grey step
     (or, without one, ``d_expected``) and the outer end of a marking band.
+
+    In grey levels the boundary is the outermost departure from the ground's level
+    (:meth:`_StepProfile.ground_exit`), placed by a fit of the blurred ground / surface /
+    marking model (:func:`_fit_boundary`) with the runway's own surface level
+    ``surface_level`` (from :func:`surface_extent`) when it is known.
 
     Returns None when no step stands out of the profile's noise by ``min_significance`` or
     reaches a quarter of ``min_step`` grey levels per pixel (in grey and in chroma).
@@ -196,9 +257,23 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     width_s = abs(sd_right[0] - sd_left[0]) * d_expected / d_ref       # runway width along the horizon at d_expected
     outer = max(2.5, 0.02 * d_expected, marking_fraction * width_s * d_expected / horizon.camera.fx + 1.0)
     profile_of = functools.partial(_depth_profile, maps=maps, inside=inside, rows_ok=rows_ok)
-    grey = _step_profile(profile_of(image[v0:v1, u0:u1]), depths, step_d_px, d_expected, outward)
+    patch = image[v0:v1, u0:u1]
+    level_profile, texture_profile = profile_of(patch, texture=True)
+    grey = _step_profile(level_profile, depths, step_d_px, d_expected, outward)
+    texture = _step_profile(texture_profile, depths, step_d_px, d_expected, outward)
     chosen = grey.pick(min_significance, 0.25 * min_step, inner, outer, outward) if grey else None
     best = (grey, chosen) if chosen is not None else None
+    # the outermost departure from the ground, in level or in texture
+    exits = []
+    if grey is not None:
+        found = grey.ground_exit(outward, inner, outer, min_level_change=0.5 * min_step)
+        if found is not None:
+            exits.append((found[0], found[1], found[2], "ground-exit"))
+    if texture is not None:
+        found = texture.ground_exit(outward, inner, outer, min_level_change=0.25 * min_step, rising_only=True)
+        if found is not None:
+            exits.append((found[0], found[1], found[2], "texture-exit"))
+    exit_depth = max(exits, key=lambda e: e[0] * outward) if exits else None
     if colour is not None:
         chroma = _step_profile(profile_of(chroma_of(colour[v0:v1, u0:u1])), depths, step_d_px, d_expected, outward)
         if chroma is not None:
@@ -207,24 +282,131 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
             pick = chroma.pick_rising(min_significance, min_chroma_step, d_from, inner, outer, outward)
             if pick is not None:
                 best = (chroma, pick)
-    if best is None:
+    if best is not None and best[0] is not grey:
+        profile, chosen = best
+        depth, method = profile.subpixel(chosen), "chroma"
+        step, significance = float(profile.g[chosen]), float(profile.magnitude[chosen] / profile.noise)
+    elif exit_depth is not None:
+        depth, step, significance, method = exit_depth
+    elif best is not None:
+        profile, chosen = best
+        depth, method = profile.subpixel(chosen), "grey"
+        step, significance = float(profile.g[chosen]), float(profile.magnitude[chosen] / profile.noise)
+    else:
         return None
-    profile, chosen = best
-    depth = profile.subpixel(chosen)
+    spans = _spans_width(patch, maps, inside, rows_ok, fractions, depths, outward, depth,
+                         level_profile, texture_profile)
     centre_point = horizon.pencil_point(s0, k_centre, depth)
     line_h = np.cross(np.array([centre_point[0], centre_point[1], 1.0]), v2)
     line_h = line_h / np.linalg.norm(line_h[:2])
     return TransverseLine(line_h=line_h, corner_left_uv=_meet(line_h, line_left),
                           corner_right_uv=_meet(line_h, line_right), depth_px=depth,
-                          step=float(profile.g[chosen]), significance=float(profile.magnitude[chosen] / profile.noise))
+                          step=step, significance=significance, method=method, spans=spans)
 
 
-def _depth_profile(patch, maps, inside, rows_ok) -> np.ndarray:
-    """Mean of ``patch`` along each transverse line (NaN where too little of it is in the image)."""
+def _transition(profile, depths, depth, outward, reach: float = 3.0) -> float:
+    """Mean of ``profile`` from 1 to ``reach`` px outside ``depth`` minus that 1 to ``reach`` px inside."""
+    u = (depths - depth) * outward
+    outside = np.isfinite(profile) & (u >= 1.0) & (u <= reach)
+    inside = np.isfinite(profile) & (u <= -1.0) & (u >= -reach)
+    if not (outside.any() and inside.any()):
+        return math.nan
+    return float(profile[outside].mean() - profile[inside].mean())
+
+
+def _spans_width(patch, maps, inside, rows_ok, fractions, depths, outward, depth, level_profile, texture_profile,
+                 n_parts: int = 3, min_share: float = 0.3) -> bool:
+    """Does the boundary at ``depth`` run across the runway's whole width?
+
+    A threshold (or runway end) spans the runway from edge to edge; a touchdown-zone or aiming
+    point marking, a designation number or a pavement joining one side does not. The change of
+    level (or of texture) across ``depth`` seen over the whole width must be seen, with the same
+    sign and at least ``min_share`` of its size, in each third of the width.
+    """
+    reference = [_transition(level_profile, depths, depth, outward),
+                 _transition(texture_profile, depths, depth, outward)]
+    for columns in np.array_split(np.arange(len(fractions)), n_parts):
+        sub_inside = np.zeros_like(inside)
+        sub_inside[:, columns] = inside[:, columns]
+        sub_rows = rows_ok & (sub_inside.sum(axis=1) >= 0.5 * len(columns))
+        level, spread = _depth_profile(patch, maps, sub_inside, sub_rows, texture=True)
+        ok = False
+        for whole, part_profile in zip(reference, (level, spread)):
+            part = _transition(part_profile, depths, depth, outward)
+            if math.isfinite(whole) and math.isfinite(part) and abs(whole) >= 2.0 \
+                    and part * math.copysign(1.0, whole) >= min_share * abs(whole):
+                ok = True
+        if not ok:
+            return False
+    return True
+
+
+def _fit_boundary(profile: "_StepProfile", outward: int, d_exit: float,
+                  before_px: float = 3.0, after_px: float = 4.0) -> float | None:
+    """Sub-pixel boundary depth from a fit of a blurred ground / band / surface model.
+
+    With ``u = (d - d_exit) * outward`` (positive outside the runway), the profile near the
+    boundary is modelled as
+
+        p(u) = G(u) + (L1 - G(u)) S(u1 - u) + (L2 - L1) S(u1 - w - u),   S(x) = Phi(x / sigma)
+
+    ground ``G(u) = g0 + g1 u`` (a local trend: haze and large-scale texture), then from the
+    boundary ``u1`` inwards a band of level ``L1`` and width ``w``, then level ``L2``, all blurred
+    by a Gaussian of ``sigma``. The band is the bare surface before the threshold stripes where
+    those begin 6 m inside (ICAO) and are resolved, or the stripes themselves where they are not:
+    the two cases differ only in which of ``L1``, ``L2`` is brighter, so one model serves both.
+    Where the band is a pixel or less wide, a half-level rule lands between its two flanks; the
+    fit keeps ``u1`` at the ground's end. Returns None when the fit does not converge with
+    ``u1`` inside the window.
+    """
+    from scipy.optimize import least_squares
+    from scipy.special import ndtr
+
+    valid = np.isfinite(profile.raw)
+    u_all = (profile.depths - d_exit) * outward
+    window = valid & (u_all >= -after_px) & (u_all <= before_px)
+    if window.sum() < 10:
+        return None
+    u, p = u_all[window], profile.raw[window]
+    outside, band, inside = u > 0.75, (u <= 0.5) & (u >= -1.0), u < -2.0
+    if outside.sum() < 2 or inside.sum() < 2 or band.sum() < 1:
+        return None
+    g0 = float(np.median(p[outside]))
+    level1 = float(p[band][np.argmax(np.abs(p[band] - g0))])
+    level2 = float(np.median(p[inside]))
+
+    def model(x):
+        b0, b1, l1, l2, u1, w, sigma = x
+        ground = b0 + b1 * u
+        return ground + (l1 - ground) * ndtr((u1 - u) / sigma) + (l2 - l1) * ndtr((u1 - w - u) / sigma)
+
+    x0 = [g0, 0.0, level1, level2, 0.0, 1.0, 0.7]
+    lower = [-np.inf, -np.inf, -np.inf, -np.inf, -1.5, 0.0, 0.3]
+    upper = [np.inf, np.inf, np.inf, np.inf, 1.5, after_px, 2.0]
+    try:
+        fit = least_squares(lambda x: model(x) - p, x0, bounds=(lower, upper), method="trf", max_nfev=300)
+    except ValueError:
+        return None
+    u1 = float(fit.x[4])
+    if not (fit.success and -1.5 < u1 < 1.5):
+        return None
+    return d_exit + outward * u1
+
+
+def _depth_profile(patch, maps, inside, rows_ok, texture: bool = False):
+    """Mean of ``patch`` along each transverse line (NaN where too little of it is in the image);
+    with ``texture``, also the spread across the line (mean absolute deviation from its median):
+    threshold stripes are longitudinal, so across the line they alternate with the surface
+    between them and the spread is high where they are, whatever their blended mean level."""
     values = cv2.remap(np.asarray(patch, dtype=np.float32), maps[0], maps[1], cv2.INTER_LINEAR,
                        borderMode=cv2.BORDER_REPLICATE)
-    profile = row_mean(np.where(inside, values, np.nan))
-    return np.where(rows_ok, profile, np.nan)
+    values = np.where(inside, values, np.nan)
+    profile = np.where(rows_ok, row_mean(values), np.nan)
+    if not texture:
+        return profile
+    median = row_quantile(values, 0.5)
+    spread = np.where(rows_ok, row_mean(np.abs(values - median[:, None])), np.nan)
+    return profile, spread
 
 
 @dataclass
@@ -238,6 +420,86 @@ class _StepProfile:
     noise: float
     step_d_px: float
     d_expected: float
+    light: np.ndarray = None       # the profile smoothed over half a pixel only
+    raw: np.ndarray = None         # the profile as sampled (gaps filled)
+
+    def ground_exit(self, outward: int, inner: float, outer: float, min_level_change: float,
+                    k_sigma: float = 4.0, rising_only: bool = False, trend_px: float = 5.0):
+        """The outermost departure of the profile from the ground, ``(depth, step, significance)``.
+
+        The ground is followed from beyond the farthest the boundary can lie (``outer`` past
+        ``d_expected``) inwards, sample by sample, as a straight line fitted to its last
+        ``trend_px`` pixels (haze and large-scale texture make it drift, not step). The boundary
+        is the first sample that leaves that line by more than ``max(k_sigma * spread,
+        min_level_change)`` (``spread``: the line's residual spread) and does not come back
+        within the next sample, or leaves it by twice that (a stripe band a pixel wide); it is
+        located where the profile crosses halfway between the ground's line and the first
+        extreme inside (the half-level crossing of a blurred step is the step's position,
+        whatever its height). This keeps the boundary where the ground meets the runway even
+        when a strong marking (the threshold stripes, 6 m inside) follows within a pixel or
+        two, where the strongest-step rule took the marking's edge. ``rising_only`` counts only
+        departures above the ground (for the texture profile). None when no departure lies
+        between ``inner`` inside and ``outer`` beyond ``d_expected``.
+        """
+        depths, light = self.depths, self.light
+        beyond = (depths - self.d_expected) * outward
+        finite = np.isfinite(light)
+        if not finite.any():
+            return None
+        # beyond the farthest the boundary can be, or at least 3 px beyond the expected end
+        # where the search window is shorter than that
+        start = max(min(outer + 1.0, float(np.max(beyond[finite])) - 3.0), inner + 2.0)
+        order = np.argsort(-beyond)                                   # from the outside inwards
+        order = order[finite[order] & (beyond[order] >= -inner - 3.0)]
+        ground = [int(i) for i in order if beyond[i] >= start]
+        if len(ground) < 6:
+            return None
+        trend_samples = max(6, int(round(trend_px / self.step_d_px)))
+        x, y = beyond[order], light[order]
+        n_ground = len(ground)
+        # the line through the trend_samples before each sample (sliding least squares from
+        # cumulative sums): slope, offset and residual RMS for every candidate at once
+        sums = [np.concatenate([[0.0], np.cumsum(a)]) for a in (np.ones_like(x), x, y, x * x, x * y, y * y)]
+        index = np.arange(n_ground, len(order))
+        lo = np.maximum(index - trend_samples, 0)
+        n, sx, sy, sxx, sxy, syy = (c[index] - c[lo] for c in sums)
+        denominator = n * sxx - sx * sx
+        with np.errstate(invalid="ignore", divide="ignore"):
+            slope = np.where(denominator > 1e-12, (n * sxy - sx * sy) / denominator, 0.0)
+        offset = (sy - slope * sx) / n
+        sse = syy - 2 * slope * sxy - 2 * offset * sy + slope * slope * sxx + 2 * slope * offset * sx + n * offset * offset
+        spread = np.sqrt(np.maximum(sse, 0.0) / np.maximum(n - 2, 1)) + 0.25
+        limit = np.maximum(k_sigma * spread, min_level_change)
+        deviation_here = y[index] - (slope * x[index] + offset)
+        nxt = np.minimum(index + 1, len(order) - 1)
+        deviation_next = np.where(index + 1 < len(order), y[nxt] - (slope * x[nxt] + offset), 0.0)
+        size_here = deviation_here if rising_only else np.abs(deviation_here)
+        size_next = deviation_next if rising_only else np.abs(deviation_next)
+        confirmed = (size_here > 2.0 * limit) | ((size_here > limit) & (size_next > limit)
+                                                  & (np.sign(deviation_here) == np.sign(deviation_next)))
+        hits = np.nonzero(confirmed)[0]
+        if len(hits) == 0:
+            return None
+        hit = int(hits[0])
+        position = int(index[hit])
+        if x[position] < -inner:
+            return None
+        slope, offset, spread = float(slope[hit]), float(offset[hit]), float(spread[hit])
+        sign = float(np.sign(deviation_here[hit]))
+        # the first extreme inside, within 3 px
+        span = np.arange(position, min(len(order), position + max(2, int(round(3.0 / self.step_d_px)))))
+        values = (y[span] - (slope * x[span] + offset)) * sign
+        peak = int(np.argmax(values))
+        half = 0.5 * values[peak]
+        # walk outwards from the extreme to the half-level crossing
+        for a, b in zip(range(position + peak, position - 1, -1), range(position + peak - 1, position - 2, -1)):
+            excess_a = (y[a] - (slope * x[a] + offset)) * sign - half
+            excess_b = (y[b] - (slope * x[b] + offset)) * sign - half
+            if excess_a >= 0 > excess_b:
+                w = excess_a / (excess_a - excess_b)
+                depth = float(depths[order[a]] + w * (depths[order[b]] - depths[order[a]]))
+                return depth, float(sign * values[peak]), float(values[peak] / spread)
+        return None
 
     def _peaks(self, min_significance: float, min_slope: float) -> np.ndarray:
         m = self.magnitude
@@ -306,7 +568,10 @@ def _step_profile(profile, depths, step_d_px, d_expected, outward) -> _StepProfi
 
     outside = valid & ((depths > d_expected + 2.0) if outward > 0 else (depths < d_expected - 2.0))
     noise = min(spread(magnitude[valid]), spread(magnitude[outside])) + 1e-3
-    return _StepProfile(depths, smooth, g, magnitude, noise, step_d_px, d_expected)
+    light_kernel = np.exp(-0.5 * (np.arange(-2, 3) * step_d_px / 0.3) ** 2)
+    light = np.convolve(np.pad(filled, 2, mode="edge"), light_kernel / light_kernel.sum(), mode="valid")
+    light = np.where(valid, light, np.nan)
+    return _StepProfile(depths, smooth, g, magnitude, noise, step_d_px, d_expected, light, filled)
 
 
 def _horizon_parallel(horizon: HorizonFrame, depth: float) -> np.ndarray:

@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from visland.camera import CameraModel
+from visland.folder import pinhole_frame
 from visland.runway import CORNER_NAMES
 from visland.tracking.anchoring import AnchorObservation
 from visland.tracking.motion import (Attitude, R_camera_from_level, rotation_homography,
@@ -676,7 +677,8 @@ class PointTracker:
         return float(np.sqrt(np.mean(np.sum((uv - uv.mean(axis=0)) ** 2, axis=1))))
 
     def _check_image(self, image, strict: bool):
-        """Validate a grey frame. strict: raise on any problem; else return (image, problem) for size problems."""
+        """Validate a grey frame (as the camera took it) and return its pinhole image. strict: raise on
+        any problem; else return (image, problem) for size problems."""
         if not isinstance(image, np.ndarray):
             raise ValueError(f"image must be a numpy array, got {type(image).__name__}")
         if image.ndim != 2:
@@ -690,6 +692,9 @@ class PointTracker:
             if strict:
                 raise ValueError(problem)
             return image, problem
+        # points are tracked and reported in the pinhole image (SPEC): a frame through a
+        # distorting lens is resampled first
+        image = pinhole_frame(image, self.camera)
         return image if strict else (image, "")
 
     def _require_started(self):

@@ -14,6 +14,7 @@ errors are one sentence naming the file, line or frame.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,7 +24,8 @@ import numpy as np
 from visland.camera import CameraModel
 from visland.contracts import Table, read_frames_csv, read_labels, read_telemetry, read_truth
 
-__all__ = ["FrameFolder", "InertialAtFrames", "IMAGE_SUFFIXES", "as_grey", "interpolate_telemetry", "list_frame_files"]
+__all__ = ["FrameFolder", "InertialAtFrames", "IMAGE_SUFFIXES", "as_grey", "pinhole_frame", "interpolate_telemetry",
+           "list_frame_files"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
 
@@ -174,3 +176,26 @@ def as_grey(image):
         return image
     import cv2  # heavy import kept local: the core must start fast
     return cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+
+
+@functools.lru_cache(maxsize=4)
+def _undistortion_maps(camera: CameraModel):
+    import cv2  # heavy import kept local: the core must start fast
+    map_u, map_v = camera.undistortion_maps()
+    return cv2.convertMaps(map_u, map_v, cv2.CV_16SC2)
+
+
+def pinhole_frame(image, camera: CameraModel):
+    """The frame as the pinhole camera of the same intrinsics would see it (SPEC: features are
+    always in the undistorted image).
+
+    ``image`` is a frame as ``camera`` took it, (H, W) or (H, W, 3) uint8; returned unchanged
+    when the camera has no lens distortion, else resampled through
+    :meth:`CameraModel.undistortion_maps` (bilinear; pixels whose lens position falls outside
+    the frame come back 0). The maps are computed once per camera.
+    """
+    if image is None or not camera.has_distortion:
+        return image
+    import cv2  # heavy import kept local: the core must start fast
+    map_a, map_b = _undistortion_maps(camera)
+    return cv2.remap(image, map_a, map_b, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)

@@ -63,6 +63,14 @@ class PaintedAirport:
     haze_range_m: float = 14000.0
     runway: bool = True                        # False: the same airport without its runway
     seed: int = 0
+    #: taxiways joining the runway's side: ``(x_m, side, angle_deg, length_m)``: where the
+    #: taxiway's centre line meets the runway edge (x from the threshold), on which side (-1 left,
+    #: +1 right), its angle to the runway (90: perpendicular, 30: a high-speed exit pointing
+    #: along the landing direction) and how far it runs out; 23 m wide, the taxiway grey
+    joining_taxiways: tuple = ()
+    taxiway_grey: float = 122.0
+    #: grey level of the distance haze (and of rays that reach no ground)
+    haze_grey: float = 165.0
 
     def rectangles(self):
         """Oriented rectangles ``(x_c, y_c, half_length, half_width, angle_rad, grey)`` in paint order:
@@ -91,6 +99,13 @@ class PaintedAirport:
             for k in range(6):
                 rects.append((900.0 + 160.0 * k, y_t + side * (360.0 + 25.0 * (k % 2)), 40.0, 18.0, 0.0,
                               float(rng.uniform(40, 200))))
+        for x_j, side, angle_deg, length in self.joining_taxiways:
+            angle = math.radians(angle_deg)
+            # centre of the strip: from the edge, half its length out along its direction
+            dx, dy = -math.cos(angle), side * math.sin(angle)
+            edge_y = side * self.runway_width_m / 2.0
+            rects.append((x_j + dx * length / 2, edge_y + dy * length / 2, length / 2 + 6.0, 11.5,
+                          math.atan2(dy, dx), self.taxiway_grey))
         # runway surface, then its markings (drawn only on the runway)
         if not self.runway:
             return rects, marks
@@ -161,6 +176,9 @@ def draw_frame(scene: PaintedAirport, camera: CameraModel, p_runway_m, R_camera_
 
     Sub-pixel rays are spread symmetrically around each pixel centre (pixel (0, 0) is centred
     at u = v = 0, SPEC), so the frame's geometry matches :meth:`CameraModel.project` exactly.
+    With a lens distortion in ``camera``, each ray leaves through the pinhole direction of its
+    (distorted) pixel, :meth:`CameraModel.undistort_normalized`: the frame is what that lens
+    sees, while labels stay in the pinhole image (SPEC).
     """
     p = np.asarray(p_runway_m, dtype=float)
     R_runway_from_camera = np.asarray(R_camera_from_runway, dtype=float).T
@@ -169,15 +187,17 @@ def draw_frame(scene: PaintedAirport, camera: CameraModel, p_runway_m, R_camera_
     height, width = camera.height, camera.width
     accumulator = np.zeros((height, width))
     u = np.arange(width, dtype=float)
-    sky_top, sky_horizon, haze = 200.0, 178.0, 165.0
+    sky_top, sky_horizon, haze = 200.0, 178.0, scene.haze_grey
     chunk = max(1, 250000 // width)
     for v0 in range(0, height, chunk):
         v = np.arange(v0, min(height, v0 + chunk), dtype=float)
         for du in offsets:
             for dv in offsets:
                 uu, vv = np.meshgrid(u + du, v + dv)
-                ray_C = np.stack([(uu - camera.cx) / camera.fx, (vv - camera.cy) / camera.fy,
-                                  np.ones_like(uu)], axis=-1)
+                xy = np.stack([(uu - camera.cx) / camera.fx, (vv - camera.cy) / camera.fy], axis=-1)
+                if camera.has_distortion:
+                    xy = camera.undistort_normalized(xy)
+                ray_C = np.concatenate([xy, np.ones_like(uu)[..., None]], axis=-1)
                 ray_R = ray_C @ R_runway_from_camera.T
                 ray_R /= np.linalg.norm(ray_R, axis=-1, keepdims=True)
                 down = ray_R[..., 2]

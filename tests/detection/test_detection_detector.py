@@ -103,5 +103,6 @@ def test_colour_places_the_threshold_and_edges_where_grey_levels_cannot(name, di
                 assert edge_error_px(camera, labels, result, side) < 0.3
             assert abs(math.degrees(result.dpsi_rad - state.dpsi_rad[0])) < 0.05
     assert errors["colour"] < 0.4
-    # what the chroma is for: in grey levels the corners sit on the stripes' inner edges
-    assert errors["grey"] > 2.0 * errors["colour"] + 0.3
+    # in grey levels the blended stripes have the grass's level, so only their texture (longitudinal
+    # stripes alternating with the surface across the runway) tells where the runway starts
+    assert errors["grey"] < 1.5
