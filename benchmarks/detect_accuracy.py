@@ -100,6 +100,8 @@ def main(argv=None) -> int:
     parser.add_argument("--start-m", type=float, default=5000.0, help="first frame this far before the threshold")
     parser.add_argument("--stop-ft", type=float, default=100.0, help="last frame at this height (default 100 ft)")
     parser.add_argument("--acquire", action="store_true", help="search every frame from scratch (no tracking)")
+    parser.add_argument("--colour", action="store_true", help="give the detector the colour frames (as `visland "
+                                                              "detect` does) instead of grey levels")
     parser.add_argument("--out", default="/tmp/detection/detect_accuracy.csv", help="per-frame CSV")
     parser.add_argument("--cache", metavar="DIR", help="keep rendered frames as PNG in DIR and reuse them "
                                                         "(re-running the detector without rendering again)")
@@ -144,14 +146,19 @@ def main(argv=None) -> int:
                 for j, index in enumerate(chosen):
                     cached = os.path.join(args.cache, f"{scenario.name}_{args.size}_{index:05d}.png") \
                         if args.cache else None
-                    grey = cv2.imread(cached, cv2.IMREAD_GRAYSCALE) if cached and os.path.exists(cached) else None
+                    if cached and args.colour:
+                        cached = cached.replace(".png", "_rgb.png")
+                    grey = cv2.imread(cached, cv2.IMREAD_UNCHANGED) if cached and os.path.exists(cached) else None
+                    if grey is not None and grey.ndim == 3:
+                        grey = cv2.cvtColor(grey, cv2.COLOR_BGR2RGB)
                     if grey is None:
                         if renderer is None:
                             renderer = FrameRenderer(SceneParams(), camera, scenario.runway)
-                        grey = cv2.cvtColor(renderer.render(states.p_runway_m[j], R[j]), cv2.COLOR_RGB2GRAY)
+                        rgb = renderer.render(states.p_runway_m[j], R[j])
+                        grey = rgb if args.colour else cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
                         if cached:
                             os.makedirs(args.cache, exist_ok=True)
-                            cv2.imwrite(cached, grey)
+                            cv2.imwrite(cached, cv2.cvtColor(grey, cv2.COLOR_RGB2BGR) if grey.ndim == 3 else grey)
                     tic = time.perf_counter()
                     result = detect_runway(grey, camera, float(states.roll_rad[j]), float(states.pitch_rad[j]),
                                            params=params, previous=None if args.acquire else previous)

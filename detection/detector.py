@@ -446,8 +446,12 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     seg_l, seg_r = _segment_in_depth(horizon, fits["left"]), _segment_in_depth(horizon, fits["right"])
     d_far = max(horizon.to_sd(seg_l)[0, 1], horizon.to_sd(seg_r)[0, 1])
     d_near = min(horizon.to_sd(seg_l)[1, 1], horizon.to_sd(seg_r)[1, 1])
-    if d_near <= d_far:
-        return None, "the two edges do not overlap in depth"
+    # the two sides of one runway are seen over a common stretch of depth (a quarter of the
+    # shorter one at least); two lines supported over disjoint depths are two other objects
+    span_l, span_r = (float(np.ptp(horizon.to_sd(seg)[:, 1])) for seg in (seg_l, seg_r))
+    if d_near - d_far < max(params.min_edge_length_px, 0.25 * min(span_l, span_r)):
+        return None, (f"the two edges overlap over {max(d_near - d_far, 0.0):.0f} px of depth only (their supports "
+                      f"span {span_l:.0f} and {span_r:.0f} px): not the two sides of one runway")
     if not (s0_l + k_l * d_near < s0_r + k_r * d_near):
         return None, "the edges cross below the horizon"
     if prediction is not None:

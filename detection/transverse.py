@@ -263,16 +263,26 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     texture = _step_profile(texture_profile, depths, step_d_px, d_expected, outward)
     chosen = grey.pick(min_significance, 0.25 * min_step, inner, outer, outward) if grey else None
     best = (grey, chosen) if chosen is not None else None
-    # the outermost departure from the ground, in level or in texture
+    # the outermost departure from the ground that looks like the runway: in texture (the
+    # stripes), or in level towards the runway's own surface level (a bare strip, a runway
+    # without stripes); a departure away from it without texture is the ground's own (a
+    # brighter streak of grass, a field)
     exits = []
+    texture_departures = (texture.ground_departures(outward, inner, outer, min_level_change=0.25 * min_step,
+                                                    rising_only=True) if texture is not None else [])
+    if texture_departures:
+        exits.append(texture_departures[0][:3] + ("texture-exit",))
     if grey is not None:
-        found = grey.ground_exit(outward, inner, outer, min_level_change=0.5 * min_step)
-        if found is not None:
-            exits.append((found[0], found[1], found[2], "ground-exit"))
-    if texture is not None:
-        found = texture.ground_exit(outward, inner, outer, min_level_change=0.25 * min_step, rising_only=True)
-        if found is not None:
-            exits.append((found[0], found[1], found[2], "texture-exit"))
+        for depth_i, step_i, significance_i, extreme in grey.ground_departures(outward, inner, outer,
+                                                                               min_level_change=0.5 * min_step):
+            ground_level = extreme - step_i
+            towards_surface = (not math.isfinite(surface_level)
+                               or ((extreme - ground_level) * (surface_level - ground_level) > 0
+                                   and abs(extreme - ground_level) >= 0.3 * abs(surface_level - ground_level)))
+            textured = any(abs(t[0] - depth_i) <= 1.5 for t in texture_departures)
+            if towards_surface or textured:
+                exits.append((depth_i, step_i, significance_i, "ground-exit"))
+                break
     exit_depth = max(exits, key=lambda e: e[0] * outward) if exits else None
     if colour is not None:
         chroma = _step_profile(profile_of(chroma_of(colour[v0:v1, u0:u1])), depths, step_d_px, d_expected, outward)
@@ -288,11 +298,9 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
         step, significance = float(profile.g[chosen]), float(profile.magnitude[chosen] / profile.noise)
     elif exit_depth is not None:
         depth, step, significance, method = exit_depth
-    elif best is not None:
-        profile, chosen = best
-        depth, method = profile.subpixel(chosen), "grey"
-        step, significance = float(profile.g[chosen]), float(profile.magnitude[chosen] / profile.noise)
     else:
+        # no departure from the ground looks like the runway's start: the strongest step in the
+        # window would be a guess (a marking, a pavement joining the runway), so there is none
         return None
     spans = _spans_width(patch, maps, inside, rows_ok, fractions, depths, outward, depth,
                          level_profile, texture_profile)
@@ -423,40 +431,42 @@ class _StepProfile:
     light: np.ndarray = None       # the profile smoothed over half a pixel only
     raw: np.ndarray = None         # the profile as sampled (gaps filled)
 
-    def ground_exit(self, outward: int, inner: float, outer: float, min_level_change: float,
-                    k_sigma: float = 4.0, rising_only: bool = False, trend_px: float = 5.0):
-        """The outermost departure of the profile from the ground, ``(depth, step, significance)``.
+    def ground_departures(self, outward: int, inner: float, outer: float, min_level_change: float,
+                          k_sigma: float = 4.0, rising_only: bool = False, trend_px: float = 5.0) -> list:
+        """Departures of the profile from the ground, outermost first: ``[(depth, step, significance, extreme)]``.
 
         The ground is followed from beyond the farthest the boundary can lie (``outer`` past
-        ``d_expected``) inwards, sample by sample, as a straight line fitted to its last
-        ``trend_px`` pixels (haze and large-scale texture make it drift, not step). The boundary
-        is the first sample that leaves that line by more than ``max(k_sigma * spread,
-        min_level_change)`` (``spread``: the line's residual spread) and does not come back
-        within the next sample, or leaves it by twice that (a stripe band a pixel wide); it is
+        ``d_expected``) inwards as a straight line fitted to the ``trend_px`` pixels before each
+        sample (haze and large-scale texture make it drift, not step). A departure is a sample
+        that leaves that line by more than ``max(k_sigma * spread, min_level_change)`` and does
+        not come back within the next sample, or leaves it by twice that (a stripe band a pixel
+        wide); ``spread`` is the larger of the line's residual spread and the ground's texture
+        over the whole reference stretch (streaked grass must not pass for a boundary). Each is
         located where the profile crosses halfway between the ground's line and the first
         extreme inside (the half-level crossing of a blurred step is the step's position,
-        whatever its height). This keeps the boundary where the ground meets the runway even
-        when a strong marking (the threshold stripes, 6 m inside) follows within a pixel or
-        two, where the strongest-step rule took the marking's edge. ``rising_only`` counts only
-        departures above the ground (for the texture profile). None when no departure lies
-        between ``inner`` inside and ``outer`` beyond ``d_expected``.
+        whatever its height), which keeps the boundary where the ground meets the runway even
+        when a strong marking (the threshold stripes, 6 m inside) follows within a pixel or two.
+        ``extreme`` is the level reached inside. ``rising_only`` counts only departures above the
+        ground (the texture profile). Departures further than ``inner`` inside ``d_expected``
+        are not returned.
         """
         depths, light = self.depths, self.light
         beyond = (depths - self.d_expected) * outward
         finite = np.isfinite(light)
         if not finite.any():
-            return None
+            return []
         # beyond the farthest the boundary can be, or at least 3 px beyond the expected end
         # where the search window is shorter than that
         start = max(min(outer + 1.0, float(np.max(beyond[finite])) - 3.0), inner + 2.0)
         order = np.argsort(-beyond)                                   # from the outside inwards
         order = order[finite[order] & (beyond[order] >= -inner - 3.0)]
-        ground = [int(i) for i in order if beyond[i] >= start]
-        if len(ground) < 6:
-            return None
-        trend_samples = max(6, int(round(trend_px / self.step_d_px)))
+        n_ground = int(np.sum(beyond[order] >= start))
+        if n_ground < 6:
+            return []
         x, y = beyond[order], light[order]
-        n_ground = len(ground)
+        reference_slope, reference_offset = np.polyfit(x[:n_ground], y[:n_ground], 1)
+        texture = 1.4826 * float(np.median(np.abs(y[:n_ground] - (reference_slope * x[:n_ground] + reference_offset))))
+        trend_samples = max(6, int(round(trend_px / self.step_d_px)))
         # the line through the trend_samples before each sample (sliding least squares from
         # cumulative sums): slope, offset and residual RMS for every candidate at once
         sums = [np.concatenate([[0.0], np.cumsum(a)]) for a in (np.ones_like(x), x, y, x * x, x * y, y * y)]
@@ -468,7 +478,7 @@ class _StepProfile:
             slope = np.where(denominator > 1e-12, (n * sxy - sx * sy) / denominator, 0.0)
         offset = (sy - slope * sx) / n
         sse = syy - 2 * slope * sxy - 2 * offset * sy + slope * slope * sxx + 2 * slope * offset * sx + n * offset * offset
-        spread = np.sqrt(np.maximum(sse, 0.0) / np.maximum(n - 2, 1)) + 0.25
+        spread = np.maximum(np.sqrt(np.maximum(sse, 0.0) / np.maximum(n - 2, 1)), texture) + 0.25
         limit = np.maximum(k_sigma * spread, min_level_change)
         deviation_here = y[index] - (slope * x[index] + offset)
         nxt = np.minimum(index + 1, len(order) - 1)
@@ -477,29 +487,33 @@ class _StepProfile:
         size_next = deviation_next if rising_only else np.abs(deviation_next)
         confirmed = (size_here > 2.0 * limit) | ((size_here > limit) & (size_next > limit)
                                                   & (np.sign(deviation_here) == np.sign(deviation_next)))
-        hits = np.nonzero(confirmed)[0]
-        if len(hits) == 0:
-            return None
-        hit = int(hits[0])
-        position = int(index[hit])
-        if x[position] < -inner:
-            return None
-        slope, offset, spread = float(slope[hit]), float(offset[hit]), float(spread[hit])
-        sign = float(np.sign(deviation_here[hit]))
-        # the first extreme inside, within 3 px
-        span = np.arange(position, min(len(order), position + max(2, int(round(3.0 / self.step_d_px)))))
-        values = (y[span] - (slope * x[span] + offset)) * sign
-        peak = int(np.argmax(values))
-        half = 0.5 * values[peak]
-        # walk outwards from the extreme to the half-level crossing
-        for a, b in zip(range(position + peak, position - 1, -1), range(position + peak - 1, position - 2, -1)):
-            excess_a = (y[a] - (slope * x[a] + offset)) * sign - half
-            excess_b = (y[b] - (slope * x[b] + offset)) * sign - half
-            if excess_a >= 0 > excess_b:
-                w = excess_a / (excess_a - excess_b)
-                depth = float(depths[order[a]] + w * (depths[order[b]] - depths[order[a]]))
-                return depth, float(sign * values[peak]), float(values[peak] / spread)
-        return None
+        out = []
+        reach = max(2, int(round(3.0 / self.step_d_px)))
+        last = -10
+        for hit in np.nonzero(confirmed)[0]:
+            position = int(index[hit])
+            if x[position] < -inner:
+                break
+            if position <= last + reach:
+                continue                       # the same departure seen again
+            last = position
+            a_line, b_line = float(slope[hit]), float(offset[hit])
+            sign = float(np.sign(deviation_here[hit]))
+            span = np.arange(position, min(len(order), position + reach))
+            values = (y[span] - (a_line * x[span] + b_line)) * sign
+            peak = int(np.argmax(values))
+            half = 0.5 * values[peak]
+            # walk outwards from the extreme to the half-level crossing
+            for a, b in zip(range(position + peak, position - 1, -1), range(position + peak - 1, position - 2, -1)):
+                excess_a = (y[a] - (a_line * x[a] + b_line)) * sign - half
+                excess_b = (y[b] - (a_line * x[b] + b_line)) * sign - half
+                if excess_a >= 0 > excess_b:
+                    w = excess_a / (excess_a - excess_b)
+                    depth = float(depths[order[a]] + w * (depths[order[b]] - depths[order[a]]))
+                    out.append((depth, float(sign * values[peak]), float(values[peak] / spread[hit]),
+                                float(y[span[peak]])))
+                    break
+        return out
 
     def _peaks(self, min_significance: float, min_slope: float) -> np.ndarray:
         m = self.magnitude
