@@ -128,9 +128,14 @@ def runway_lines(R_camera_from_runway, p_camera_runway_m, runway: Runway) -> dic
     return out
 
 
-def vanishing_point_xy(R_camera_from_runway) -> np.ndarray:
-    """Normalised image of the runway direction (runway +x), shape (n, 2)."""
-    d = np.asarray(R_camera_from_runway)[..., :, 0]
+def vanishing_point_xy(R_camera_from_runway, direction_runway=None) -> np.ndarray:
+    """Normalised image of the runway direction, shape (n, 2).
+
+    ``direction_runway`` (3,) is the centreline's direction in R (default runway +x, a level
+    runway; :meth:`visland.runway.Runway.direction_runway` for a sloped one).
+    """
+    R = np.asarray(R_camera_from_runway)
+    d = R[..., :, 0] if direction_runway is None else R @ np.asarray(direction_runway, dtype=float)
     return d[..., :2] / d[..., 2:3]
 
 
@@ -331,7 +336,7 @@ def ideal_features(states, runway: Runway, camera: CameraModel, camera_true: Cam
     R_cr = batch_R_camera_from_runway(states.roll_rad, states.pitch_rad, states.dpsi_rad, camera_true.mount_rpy_rad)
     uv, in_front, visible = project_runway_corners(R_cr, states.p_runway_m, runway, camera_true)
     lines = runway_lines(R_cr, states.p_runway_m, runway)
-    vp_xy = vanishing_point_xy(R_cr)
+    vp_xy = vanishing_point_xy(R_cr, runway.direction_runway())
     if pixel_noise_px < 0 or not math.isfinite(pixel_noise_px):
         raise ValueError(f"pixel_noise_px must be a non-negative number, got {pixel_noise_px!r}")
     if pixel_noise_px > 0:
@@ -355,7 +360,7 @@ def ideal_features(states, runway: Runway, camera: CameraModel, camera_true: Cam
     yv_near = virtual_from_pixels(uv[:, :2, :], R_rc_meas, camera)
     # observability on the true motion
     v_C = np.einsum("nij,nj->ni", R_cr, states.v_runway_mps)
-    n_C = R_cr[..., :, 2]
+    n_C = R_cr @ runway.normal_runway()        # the runway plane's normal (3.33; tilted on a sloped runway)
     omega_C = np.einsum("ij,nj->ni", camera_true.R_body_from_camera.T, states.omega_body_rps)
     yv_true = (runway.corners_runway_m()[None, :2, :2] - states.p_runway_m[:, None, :2]) / (
         -states.p_runway_m[:, None, 2:3])

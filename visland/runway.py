@@ -1,10 +1,16 @@
 """Runway geometry in the runway frame R (truth side: the estimators never read it).
 
-R has its origin at the centre of the threshold line, x along the centreline in the landing
-direction, y to the right, z down; the surface is z = 0. The aiming point E (end of the
-glide path) is at ``(D, 0, 0)`` with ``D = 320 m`` by default: 55 ft threshold crossing
-height on a 3 deg slope gives 16.764 m / tan(3 deg) = 320 m (the thesis's "350 m" in its
-section 3.3 is a slip, see ../shared/seeds/README.md).
+R has its origin at the centre of the threshold line, x along the *horizontal projection* of
+the centreline in the landing direction, y to the right, z down along gravity: R is level
+whatever the runway's slope, so ``dH = -z`` is the vertical height above the threshold and the
+glide path stays 3 deg to the horizontal. A runway with a longitudinal slope ``slope_pct``
+(positive uphill in the landing direction: the far end higher) has its surface on
+``z = -x slope_pct / 100``; with no slope (the default) that is SPEC's ``z = 0``. There is no
+transverse slope: the threshold line and every line across the runway are horizontal.
+
+The aiming point E (end of the glide path) is at ``(D, 0, 0)`` with ``D = 320 m`` by default:
+55 ft threshold crossing height on a 3 deg slope gives 16.764 m / tan(3 deg) = 320 m (the
+thesis's "350 m" in its section 3.3 is a slip, see ../shared/seeds/README.md).
 
 "Left" and "right" are as seen by a pilot looking along the landing direction: the left
 edge is at ``y = -width/2``.
@@ -18,13 +24,17 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Runway", "RUNWAY_SIZES", "GLIDE_SLOPE_RAD", "CORNER_NAMES"]
+__all__ = ["Runway", "RUNWAY_SIZES", "GLIDE_SLOPE_RAD", "CORNER_NAMES", "MAX_SLOPE_PCT"]
 
 GLIDE_SLOPE_RAD = math.radians(3.0)
 
 #: Corner names in label order: threshold corners (P', P'' of thesis Fig. 3.5), then the
 #: runway-end corners.
 CORNER_NAMES = ("near_left", "near_right", "far_left", "far_right")
+
+#: Largest longitudinal slope accepted, percent (ICAO Annex 14 allows at most 1 % to 2 % overall
+#: depending on the runway's code; the simulator and studies use up to 1.5 %).
+MAX_SLOPE_PCT = 2.0
 
 #: Named runway sizes (length_m, width_m): the SPEC default and the range scenes vary over.
 RUNWAY_SIZES = {
@@ -40,14 +50,28 @@ RUNWAY_SIZES = {
 class Runway:
     """A rectangular runway of ``length_m`` x ``width_m`` with aiming point at ``aim_distance_m``.
 
-    ``heading_deg`` is the runway's true heading (from north), used only to place the runway
-    in NED for simulation; the estimators must recover what they need from the image.
+    Attributes
+    ----------
+    length_m : float
+        Length of the horizontal projection of the centreline, threshold to runway end, metres.
+    width_m : float
+        Width, metres.
+    aim_distance_m : float
+        Distance D of the aiming point past the threshold (SPEC: 320 m), metres.
+    heading_deg : float
+        True heading of the landing direction (from north), used only to place the runway in NED
+        for simulation; the estimators must recover what they need from the image.
+    slope_pct : float
+        Longitudinal slope, percent, positive uphill in the landing direction (the far end
+        higher): the surface is ``z = -x slope_pct / 100`` in the level frame R (module
+        docstring). In ``[-MAX_SLOPE_PCT, MAX_SLOPE_PCT]``.
     """
 
     length_m: float = 3000.0
     width_m: float = 45.0
     aim_distance_m: float = 320.0
     heading_deg: float = 40.0
+    slope_pct: float = 0.0
 
     def __post_init__(self):
         checks = (
@@ -55,6 +79,7 @@ class Runway:
             ("width_m", self.width_m, 10.0, 100.0),
             ("aim_distance_m", self.aim_distance_m, 0.0, 1000.0),
             ("heading_deg", self.heading_deg, 0.0, 360.0),
+            ("slope_pct", self.slope_pct, -MAX_SLOPE_PCT, MAX_SLOPE_PCT),
         )
         for name, value, low, high in checks:
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
@@ -76,20 +101,47 @@ class Runway:
     def heading_rad(self) -> float:
         return math.radians(self.heading_deg)
 
+    @property
+    def slope_rad(self) -> float:
+        """Angle of the centreline above the horizontal, ``atan(slope_pct / 100)`` (uphill positive)."""
+        return math.atan(self.slope_pct / 100.0)
+
+    def surface_z_m(self, x_runway_m):
+        """z in R (down) of the runway surface (and its extension) at ``x_runway_m``: ``-x slope_pct/100``."""
+        return -np.asarray(x_runway_m, dtype=float) * (self.slope_pct / 100.0)
+
+    def direction_runway(self) -> np.ndarray:
+        """Unit vector of the centreline in the landing direction, in R, shape (3,): ``(1, 0, -s)/|.|``."""
+        s = self.slope_pct / 100.0
+        return np.array([1.0, 0.0, -s]) / math.sqrt(1.0 + s * s)
+
+    def normal_runway(self) -> np.ndarray:
+        """Unit normal of the runway surface pointing down (into the ground), in R, shape (3,).
+
+        ``(s, 0, 1)/|.|``: orthogonal to :meth:`direction_runway` and to the lateral axis y; the
+        runway's own "z" axis (thesis 3.33's ``n`` for a sloped runway).
+        """
+        s = self.slope_pct / 100.0
+        return np.array([s, 0.0, 1.0]) / math.sqrt(1.0 + s * s)
+
     def corners_runway_m(self) -> np.ndarray:
-        """The four corners in R, shape (4, 3), in :data:`CORNER_NAMES` order."""
+        """The four corners in R, shape (4, 3), in :data:`CORNER_NAMES` order (on the sloped surface)."""
         half = self.width_m / 2.0
+        z_far = float(self.surface_z_m(self.length_m))
         return np.array([
             [0.0, -half, 0.0],
             [0.0, half, 0.0],
-            [self.length_m, -half, 0.0],
-            [self.length_m, half, 0.0],
+            [self.length_m, -half, z_far],
+            [self.length_m, half, z_far],
         ])
 
     def edge_lines_runway_m(self) -> dict:
-        """The left edge, right edge and centre line as (point, unit direction) in R."""
+        """The left edge, right edge and centre line as (point, unit direction) in R.
+
+        The points are on the threshold line; the direction is :meth:`direction_runway` (sloped).
+        """
         half = self.width_m / 2.0
-        direction = np.array([1.0, 0.0, 0.0])
+        direction = self.direction_runway()
         return {
             "left": (np.array([0.0, -half, 0.0]), direction),
             "right": (np.array([0.0, half, 0.0]), direction),
@@ -97,9 +149,10 @@ class Runway:
         }
 
     def to_json_dict(self) -> dict:
-        """The ``runway.json`` content of SPEC.md (truth side only)."""
+        """The ``runway.json`` content of SPEC.md (truth side only), with ``slope_pct``."""
         return {"length_m": self.length_m, "width_m": self.width_m,
-                "aim_distance_m": self.aim_distance_m, "heading_deg": self.heading_deg}
+                "aim_distance_m": self.aim_distance_m, "heading_deg": self.heading_deg,
+                "slope_pct": self.slope_pct}
 
     @classmethod
     def load(cls, path) -> "Runway":
@@ -115,11 +168,7 @@ class Runway:
                 raise ValueError(f"{path}: missing field '{key}'")
         try:
             return cls(float(data["length_m"]), float(data["width_m"]), float(data["aim_distance_m"]),
-                       float(data.get("heading_deg", 40.0)))
+                       float(data.get("heading_deg", 40.0)), float(data.get("slope_pct", 0.0)))
         except (TypeError, ValueError) as error:
             raise ValueError(f"{path}: {error}") from None
 
-
-def glide_path_height_m(dx_m):
-    """Height of the 3 deg glide path at deviation ``dx_m`` from the aiming point (SPEC)."""
-    return -np.asarray(dx_m, dtype=float) * math.tan(GLIDE_SLOPE_RAD)

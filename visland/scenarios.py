@@ -70,10 +70,6 @@ class Wind:
         if not isinstance(self.gust, bool):
             raise ValueError(f"wind.gust must be true or false, got {self.gust!r}")
 
-    @property
-    def is_calm(self) -> bool:
-        return self.crosswind_mps == 0.0 and self.headwind_mps == 0.0 and not self.gust
-
 
 @dataclass(frozen=True)
 class Scenario:
@@ -117,7 +113,8 @@ class Scenario:
     def to_dict(self) -> dict:
         """A TOML-ready dictionary (round-trips through :func:`scenario_from_dict`)."""
         out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("runway", "wind")}
-        out["runway"] = {k: getattr(self.runway, k) for k in ("length_m", "width_m", "aim_distance_m", "heading_deg")}
+        out["runway"] = {k: getattr(self.runway, k) for k in ("length_m", "width_m", "aim_distance_m", "heading_deg",
+                                                             "slope_pct")}
         wind = {f.name: getattr(self.wind, f.name) for f in fields(Wind)}
         if wind["crosswind_onset_m"] is None:
             del wind["crosswind_onset_m"]
@@ -197,7 +194,7 @@ def scenario_from_dict(data: dict, source: str = "scenario") -> Scenario:
             raise ValueError("field 'runway' must be a table")
         if not isinstance(wind_data, dict):
             raise ValueError("field 'wind' must be a table")
-        runway_keys = {"length_m", "width_m", "aim_distance_m", "heading_deg", "size"}
+        runway_keys = {"length_m", "width_m", "aim_distance_m", "heading_deg", "slope_pct", "size"}
         for key in runway_data:
             if key not in runway_keys:
                 raise ValueError(f"unknown field 'runway.{key}' (known: {', '.join(sorted(runway_keys))})")
@@ -233,6 +230,7 @@ def load_scenario_file(path) -> Scenario:
         length_m = 2500.0
         width_m = 30.0
         heading_deg = 123.0
+        slope_pct = 0.8           # optional, longitudinal slope, uphill positive (default 0)
         [wind]                    # optional
         crosswind_mps = 3.0
         gust = true

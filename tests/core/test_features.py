@@ -171,3 +171,56 @@ def test_noise_is_seeded_and_has_the_requested_size(flown):
     assert np.std(diff) == pytest.approx(5.0, rel=0.03)
     with pytest.raises(ValueError, match="rng"):
         ideal_features(states, scenario.runway, camera, pixel_noise_px=1.0)
+
+
+# --------------------------------------------------------------------------- sloped runway
+def test_sloped_runway_corners_and_edges_by_hand():
+    # 1 % uphill, 3000 m long: the far end is 30 m above the threshold (z = -30 in R, z down).
+    # Camera level and aligned, 1000 m before the threshold, 100 m up: the far corners are
+    # 130 m below the camera at 4000 m ahead, the near ones 100 m below at 1000 m.
+    runway = Runway(slope_pct=1.0)
+    uv, visible = _corners(0, 0, 0, [-1000.0, 0.0, -100.0], runway=runway)
+    assert uv[0, 1] == pytest.approx(1023.5 + 2472.0 * 100.0 / 1000.0, abs=1e-9)
+    assert uv[2, 0] == pytest.approx(1023.5 + 2472.0 * (-22.5 / 4000.0), abs=1e-9)
+    assert uv[2, 1] == pytest.approx(1023.5 + 2472.0 * (70.0 / 4000.0), abs=1e-9)
+    assert visible.all()
+    # the edge lines pass through both corners of their side and through a mid-runway point
+    R_cr = batch_R_camera_from_runway(np.zeros(1), np.zeros(1), np.zeros(1), CAM0.mount_rpy_rad)
+    lines = runway_lines(R_cr, np.array([[-1000.0, 0.0, -100.0]]), runway)
+    mid = np.array([1500.0 + 1000.0, -22.5, 100.0 - 15.0])        # x = 1500 m on the left edge, 15 m up
+    for name, pts in (("left", [uv[0], uv[2], CAM0.fx * mid[1:] / mid[0] + 1023.5]),):
+        rho, theta = lines[name]
+        for u, v in pts:
+            x, y = (u - 1023.5) / 2472.0, (v - 1023.5) / 2472.0
+            assert x * math.cos(theta[0]) + y * math.sin(theta[0]) == pytest.approx(rho[0], abs=1e-12)
+
+
+def test_sloped_runway_vanishing_point_is_above_the_horizon_by_the_slope():
+    runway = Runway(slope_pct=1.5)
+    R_cr = batch_R_camera_from_runway(np.zeros(1), np.zeros(1), np.zeros(1), CAM0.mount_rpy_rad)
+    vp = vanishing_point_xy(R_cr, runway.direction_runway())[0]
+    assert vp[0] == pytest.approx(0.0, abs=1e-15)
+    assert vp[1] == pytest.approx(-0.015, abs=1e-12)           # y down: 1.5 % above the level horizon
+    # the surface holds all four corners and the normal is orthogonal to the centreline and to y
+    corners = runway.corners_runway_m()
+    np.testing.assert_allclose(corners[:, 2], runway.surface_z_m(corners[:, 0]))
+    assert runway.normal_runway() @ runway.direction_runway() == pytest.approx(0.0, abs=1e-15)
+    assert runway.normal_runway() @ (corners[2] - corners[1]) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_sloped_runway_labels_follow_the_flown_corners(flown):
+    # labels on a sloped runway: the far corners' pixels are those of points on z = -x s (checked
+    # against a projection written here), the near ones are unchanged by the slope
+    scenario, _, states = flown
+    camera = CameraModel.default()
+    sloped = Runway(slope_pct=-1.2)
+    a = ideal_features(states, scenario.runway, camera)
+    b = ideal_features(states, sloped, camera)
+    np.testing.assert_allclose(a.corners_uv[:, :2], b.corners_uv[:, :2], atol=1e-9)
+    i = len(states.t_s) // 2
+    R_cr = batch_R_camera_from_runway(states.roll_rad[i:i + 1], states.pitch_rad[i:i + 1], states.dpsi_rad[i:i + 1],
+                                      camera.mount_rpy_rad)[0]
+    far_left = np.array([sloped.length_m, -sloped.width_m / 2, 0.012 * sloped.length_m])   # downhill: lower
+    p_C = R_cr @ (far_left - states.p_runway_m[i])
+    expected = np.array([camera.fx * p_C[0] / p_C[2] + camera.cx, camera.fy * p_C[1] / p_C[2] + camera.cy])
+    np.testing.assert_allclose(b.corners_uv[i, 2], expected, atol=1e-6)

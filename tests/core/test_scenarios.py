@@ -71,3 +71,18 @@ def test_round_trip_through_a_dictionary():
     from visland.scenarios import scenario_from_dict
     s = get_scenario("dickmanns-wind")
     assert scenario_from_dict(s.to_dict()) == s
+
+
+def test_runway_slope_in_a_scenario_file_and_runway_json(tmp_path):
+    from visland.runway import Runway
+    path = tmp_path / "sloped.toml"
+    path.write_text('name = "sloped"\ndx_m = -4500.0\ndy_m = 0.0\ndgs_m = 0.0\ndpsi_deg = 0.0\n'
+                    '[runway]\nslope_pct = -0.8\n')
+    s = resolve_scenario(str(path))
+    assert s.runway.slope_pct == -0.8
+    (tmp_path / "runway.json").write_text(__import__("json").dumps(s.runway.to_json_dict()))
+    assert Runway.load(tmp_path / "runway.json") == s.runway
+    path.write_text('name = "sloped"\ndx_m = -4500.0\ndy_m = 0.0\ndgs_m = 0.0\ndpsi_deg = 0.0\n'
+                    '[runway]\nslope_pct = 3.0\n')
+    with pytest.raises(ValueError, match="runway.slope_pct"):
+        resolve_scenario(str(path))
