@@ -65,9 +65,9 @@ def scene_from_args(args):
 
 def cmd_generate(args) -> int:
     from visland.camera import CameraModel
-    from visland.cli import simulation_options_from_args
+    from visland.cli import scenario_from_args, simulation_options_from_args
     from visland.runway import Runway
-    from visland.scenarios import resolve_scenario, with_runway
+    from visland.scenarios import with_runway
     from .generate import MAX_SIZE, MAX_WORKERS, MIN_SIZE, GenerateJob, generate_dataset
 
     if not MIN_SIZE <= args.size <= MAX_SIZE:
@@ -78,10 +78,11 @@ def cmd_generate(args) -> int:
         raise ValueError(f"--workers must lie in [1, {MAX_WORKERS}], got {args.workers}")
     if not 0 <= args.png_compression <= 9:
         raise ValueError(f"--png-compression must lie in [0, 9], got {args.png_compression}")
-    scenario = resolve_scenario(args.scenario)
+    scenario = scenario_from_args(args)
     if args.runway:
         scenario = with_runway(scenario, Runway.named(args.runway, heading_deg=scenario.runway.heading_deg,
-                                                      aim_distance_m=scenario.runway.aim_distance_m))
+                                                      aim_distance_m=scenario.runway.aim_distance_m,
+                                                      slope_pct=scenario.runway.slope_pct))
     options = simulation_options_from_args(args, camera=CameraModel.default(args.size))
     job = GenerateJob(scenario, options, scene_from_args(args), png_compression=args.png_compression, lard=args.lard)
     report = generate_dataset(job, args.out, workers=args.workers, scheduler=args.scheduler, force=args.force,

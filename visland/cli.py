@@ -60,11 +60,28 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--calibration-error", type=_angles, default=0.0, metavar="DEG|R,P,Y",
                         help="camera mounting error in degrees: one value added to roll, pitch and yaw (thesis "
                              "5.2.2.2: 0.3, 0.5, 1), or three 'roll,pitch,yaw'")
+    parser.add_argument("--slope", type=float, default=None, metavar="PCT",
+                        help="runway longitudinal slope in percent, uphill positive (overrides the scenario's "
+                             "[runway] slope_pct; at most +-2)")
     parser.add_argument("--velocity-bias", type=float, default=0.0, metavar="FRACTION",
                         help="constant relative IMU velocity bias, e.g. 0.05 for 5 %% (thesis 5.2.2.3)")
     parser.add_argument("--imu-noise", type=float, default=0.0, metavar="SCALE",
                         help="IMU white noise: SCALE x (0.05 deg attitude, 0.1 deg/s rates, 0.1 m/s velocity)")
     parser.add_argument("--force", action="store_true", help="replace an existing output folder")
+
+
+def scenario_from_args(args):
+    """The scenario of ``--scenario`` with the runway options (``--slope``) applied."""
+    from dataclasses import replace
+    from visland.scenarios import resolve_scenario, with_runway
+    scenario = resolve_scenario(args.scenario)
+    if getattr(args, "slope", None) is not None:
+        try:
+            runway = replace(scenario.runway, slope_pct=args.slope)
+        except ValueError as error:
+            raise ValueError(f"--slope: {error}") from None
+        scenario = with_runway(scenario, runway)
+    return scenario
 
 
 def simulation_options_from_args(args, camera=None):
@@ -83,9 +100,8 @@ def simulation_options_from_args(args, camera=None):
 
 
 def _cmd_simulate(args) -> int:
-    from visland.scenarios import resolve_scenario
     from visland.simulate import run_simulation, summary_lines, write_simulation
-    scenario = resolve_scenario(args.scenario)
+    scenario = scenario_from_args(args)
     options = simulation_options_from_args(args)
     result = run_simulation(scenario, options)
     write_simulation(result, args.out, force=args.force)

@@ -83,3 +83,15 @@ def test_simulate_starts_fast_without_heavy_imports():
             "print(','.join(heavy))")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == ""
+
+
+def test_slope_option_reaches_runway_json_and_the_labels(tmp_path, capsys):
+    flat, sloped = tmp_path / "flat", tmp_path / "sloped"
+    assert main(["simulate", "--scenario", "thesis-2", "--out", str(flat)]) == 0
+    assert main(["simulate", "--scenario", "thesis-2", "--out", str(sloped), "--slope", "1.0"]) == 0
+    assert json.loads((sloped / "runway.json").read_text())["slope_pct"] == 1.0
+    a, b = read_labels(flat / "labels.csv"), read_labels(sloped / "labels.csv")
+    np.testing.assert_allclose(a["near_left_v_px"], b["near_left_v_px"])     # the threshold does not move
+    assert np.all(b["far_left_v_px"] < a["far_left_v_px"] - 1.0)              # the far end is 30 m higher
+    assert main(["simulate", "--scenario", "thesis-2", "--out", str(tmp_path / "x"), "--slope", "5"]) == 2
+    assert "--slope" in capsys.readouterr().err
