@@ -283,6 +283,17 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
             if towards_surface or textured:
                 exits.append((depth_i, step_i, significance_i, "ground-exit"))
                 break
+    # far away the stripes are a band a pixel or two long whose texture rises only a few grey
+    # levels above the ground's, but clearly above its spread
+    # (only while the stripes, 1/25 to 1/12 of the width each, are too narrow to be resolved:
+    # resolved stripes give a strong texture departure, and a faint one is the ground's)
+    runway_px = float(np.nanmedian(np.linalg.norm(ends_right - ends_left, axis=1)))
+    if texture is not None and not texture_departures and runway_px < 64.0:
+        for depth_t, step_t, significance_t, _ in texture.ground_departures(
+                outward, inner, outer, min_level_change=0.1 * min_step, k_sigma=3.0, rising_only=True, lag_px=1.0):
+            if significance_t >= 5.0:
+                exits.append((depth_t, step_t, significance_t, "faint-texture"))
+            break
     exit_depth = max(exits, key=lambda e: e[0] * outward) if exits else None
     if colour is not None:
         chroma = _step_profile(profile_of(chroma_of(colour[v0:v1, u0:u1])), depths, step_d_px, d_expected, outward)
@@ -432,12 +443,14 @@ class _StepProfile:
     raw: np.ndarray = None         # the profile as sampled (gaps filled)
 
     def ground_departures(self, outward: int, inner: float, outer: float, min_level_change: float,
-                          k_sigma: float = 4.0, rising_only: bool = False, trend_px: float = 5.0) -> list:
+                          k_sigma: float = 4.0, rising_only: bool = False, trend_px: float = 5.0,
+                          lag_px: float = 0.0) -> list:
         """Departures of the profile from the ground, outermost first: ``[(depth, step, significance, extreme)]``.
 
         The ground is followed from beyond the farthest the boundary can lie (``outer`` past
-        ``d_expected``) inwards as a straight line fitted to the ``trend_px`` pixels before each
-        sample (haze and large-scale texture make it drift, not step). A departure is a sample
+        ``d_expected``) inwards as a straight line fitted to the ``trend_px`` pixels ending
+        ``lag_px`` before each sample (haze and large-scale texture make it drift, not step; with
+        a lag, a faint blurred step, a ramp over a pixel or two, is not followed by the line). A departure is a sample
         that leaves that line by more than ``max(k_sigma * spread, min_level_change)`` and does
         not come back within the next sample, or leaves it by twice that (a stripe band a pixel
         wide); ``spread`` is the larger of the line's residual spread and the ground's texture
@@ -471,8 +484,12 @@ class _StepProfile:
         # cumulative sums): slope, offset and residual RMS for every candidate at once
         sums = [np.concatenate([[0.0], np.cumsum(a)]) for a in (np.ones_like(x), x, y, x * x, x * y, y * y)]
         index = np.arange(n_ground, len(order))
-        lo = np.maximum(index - trend_samples, 0)
-        n, sx, sy, sxx, sxy, syy = (c[index] - c[lo] for c in sums)
+        # the line may end ``lag_px`` before the sample: a blurred step, a ramp over a pixel or
+        # two, is then measured against the ground before it, not absorbed into the line
+        lag = int(round(lag_px / self.step_d_px))
+        hi = np.maximum(index - lag, n_ground // 2 + 1)
+        lo = np.maximum(hi - trend_samples, 0)
+        n, sx, sy, sxx, sxy, syy = (c[hi] - c[lo] for c in sums)
         denominator = n * sxx - sx * sx
         with np.errstate(invalid="ignore", divide="ignore"):
             slope = np.where(denominator > 1e-12, (n * sxy - sx * sy) / denominator, 0.0)
