@@ -101,6 +101,9 @@ class ObserverInput:
     dpsi_rad, roll_rad, pitch_rad : float
         The heading deviation used (from d_F, filtered) and the inertial roll and pitch, for
         observers and reports that need the attitude relative to the runway.
+    tas_mps : float
+        True airspeed (telemetry column ``tas_mps``), NaN when the telemetry has none; used by
+        observers that estimate the wind (``dickmanns-4d``).
     """
 
     t_s: float
@@ -115,6 +118,7 @@ class ObserverInput:
     dpsi_rad: float = 0.0
     roll_rad: float = 0.0
     pitch_rad: float = 0.0
+    tas_mps: float = math.nan
 
 
 @dataclass

@@ -8,14 +8,17 @@ from __future__ import annotations
 import json
 
 OBSERVER_HELP = ("two points: oj-2p ii-2p cccs-2p ccpi-hg-2p ccpi-hosm-2p cccj-2p kf-2p; two lines: oj-2l ii-2l "
-                 "ccpi-2l cccj-2l ekf-2l; ECC'15: ecc-hg ecc-hosm; or 'points', 'lines', 'all'")
+                 "ccpi-2l cccj-2l ekf-2l; ECC'15: ecc-hg ecc-hosm; seed 004 (4D approach): dickmanns-4d; "
+                 "or the groups 'points', 'lines', 'ecc', 'dickmanns', 'all'")
 STUDY_NAMES = ("table-5.3", "table-5.4", "table-5.6", "table-5.7", "table-5.8", "table-5.10", "table-5.12",
                "ecc", "academic")
 
 
 def _expand_observers(names):
-    from visland.estimation.registry import ECC_OBSERVERS, LINE_OBSERVERS, OBSERVER_NAMES, POINT_OBSERVERS
-    groups = {"points": POINT_OBSERVERS, "lines": LINE_OBSERVERS, "ecc": ECC_OBSERVERS, "all": OBSERVER_NAMES}
+    from visland.estimation.registry import (DICKMANNS_OBSERVERS, ECC_OBSERVERS, LINE_OBSERVERS, OBSERVER_NAMES,
+                                             POINT_OBSERVERS)
+    groups = {"points": POINT_OBSERVERS, "lines": LINE_OBSERVERS, "ecc": ECC_OBSERVERS,
+              "dickmanns": DICKMANNS_OBSERVERS, "all": OBSERVER_NAMES}
     out = []
     for name in names:
         for item in groups.get(name, (name,)):

@@ -158,6 +158,8 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
             columns["dpsi_deg"].append(math.degrees(run.dpsi_rad[f]) if np.isfinite(run.dh_m[f]) else math.nan)
             columns["observability"].append(run.observability[f])
             columns["coasting"].append(int(bool(run.coasting[f])))
+            for key in ESTIMATE_EXTRA_COLUMNS[1:]:
+                columns[key].append(run.extras[key][f] if key in run.extras else math.nan)
         n_coast = int(np.sum(run.coasting & np.isfinite(run.dh_m)))
         reasons = {}
         for f in np.nonzero(run.coasting & np.isfinite(run.dh_m))[0]:
@@ -168,11 +170,15 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
                 f"{n_coast} frames coasted{' (' + ', '.join(f'{n} {r}' for r, n in reasons.items()) + ')' if reasons else ''}; "
                 + (f"{n_withheld} frames withheld after a long gap; " if n_withheld else "") +
                 f"{1e6 * run.step_time_s / max(run.n_steps, 1):.0f} us/step")
+        for note in run.notes:
+            echo(f"{name}: {note}")
         if dh_true is not None:
             m = run_metrics(run.t_s, dh_true, run.dh_m, start_t_s=run.start_t_s)
             m.update({"start_t_s": run.start_t_s, "dh0_m": run.dh0_m, "n_frames": len(run), "n_coasting": n_coast,
                       "n_withheld": n_withheld,
                       "coasting_reasons": reasons, "params": run.params})
+            if run.notes:
+                m["notes"] = list(run.notes)
             metrics[name] = m
             line += (f"; conv 5% {m['conv_time_5pct_s']:.2f} s, dH err 400/200/100 ft "
                      f"{m['err_400ft_m']:+.3f}/{m['err_200ft_m']:+.3f}/{m['err_100ft_m']:+.3f} m")

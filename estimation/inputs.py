@@ -61,7 +61,8 @@ class InertialSeries:
     """Inertial data at the unit's rate, SI units (radians, rad/s, m/s).
 
     Attributes: ``t_s (n,)``, ``roll_rad``, ``pitch_rad``, ``heading_rad (n,)`` (unwrapped),
-    ``omega_body_rps (n, 3)`` body rates (p, q, r), ``v_ned_mps (n, 3)`` ground velocity.
+    ``omega_body_rps (n, 3)`` body rates (p, q, r), ``v_ned_mps (n, 3)`` ground velocity, and
+    optionally ``tas_mps (n,)`` the true airspeed (None when the telemetry has no ``tas_mps``).
     """
 
     t_s: np.ndarray
@@ -70,9 +71,19 @@ class InertialSeries:
     heading_rad: np.ndarray
     omega_body_rps: np.ndarray
     v_ned_mps: np.ndarray
+    tas_mps: np.ndarray | None = None
 
     def __post_init__(self):
         n = len(self.t_s)
+        if self.tas_mps is not None:
+            tas = np.asarray(self.tas_mps, dtype=float)
+            if tas.shape != (n,):
+                raise ValueError(f"InertialSeries.tas_mps must have shape ({n},)")
+            bad = np.nonzero(~(np.isfinite(tas) & (tas > 0)))[0]
+            if bad.size:
+                raise ValueError(f"telemetry: tas_mps at t = {float(self.t_s[bad[0]]):g} s is {tas[bad[0]]!r} "
+                                 "(a positive airspeed in m/s is required)")
+            self.tas_mps = tas
         for name in ("roll_rad", "pitch_rad", "heading_rad"):
             if np.shape(getattr(self, name)) != (n,):
                 raise ValueError(f"InertialSeries.{name} must have shape ({n},)")
@@ -94,14 +105,15 @@ class InertialSeries:
                    pitch_rad=np.radians(table["pitch_deg"]),
                    heading_rad=np.unwrap(np.radians(table["heading_deg"])),
                    omega_body_rps=np.radians(np.stack([table["p_dps"], table["q_dps"], table["r_dps"]], axis=1)),
-                   v_ned_mps=np.stack([table["vn_mps"], table["ve_mps"], table["vd_mps"]], axis=1))
+                   v_ned_mps=np.stack([table["vn_mps"], table["ve_mps"], table["vd_mps"]], axis=1),
+                   tas_mps=table["tas_mps"] if "tas_mps" in table else None)
 
     @classmethod
     def from_imu(cls, imu) -> "InertialSeries":
         """From :class:`visland.sensors.ImuSamples` (a simulation, no files)."""
         return cls(t_s=imu.t_s, roll_rad=np.unwrap(imu.roll_rad), pitch_rad=imu.pitch_rad,
                    heading_rad=np.unwrap(imu.heading_rad), omega_body_rps=imu.omega_body_rps,
-                   v_ned_mps=imu.v_ned_mps)
+                   v_ned_mps=imu.v_ned_mps, tas_mps=getattr(imu, "tas_mps", None))
 
     def at(self, times_s) -> "InertialSeries":
         """Linear interpolation at ``times_s`` (inside the covered span)."""
@@ -116,7 +128,8 @@ class InertialSeries:
             return np.stack([np.interp(times, self.t_s, series[:, k]) for k in range(series.shape[1])], axis=1)
 
         return InertialSeries(times, interp(self.roll_rad), interp(self.pitch_rad), interp(self.heading_rad),
-                              interp(self.omega_body_rps), interp(self.v_ned_mps))
+                              interp(self.omega_body_rps), interp(self.v_ned_mps),
+                              None if self.tas_mps is None else interp(self.tas_mps))
 
 
 @dataclass
@@ -411,7 +424,8 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
             R_runway_from_camera=R_rc[j],
             points_yv=points_j, lines=lines_j, center_line=center_j,
             dpsi_rad=float(dpsi[j]) if usable[j] else math.nan,
-            roll_rad=float(ins.roll_rad[j]), pitch_rad=float(ins.pitch_rad[j])))
+            roll_rad=float(ins.roll_rad[j]), pitch_rad=float(ins.pitch_rad[j]),
+            tas_mps=math.nan if ins.tas_mps is None else float(ins.tas_mps[j])))
     return PreparedInputs(steps=steps, t_s=times, frame_of_step=frame_of_step, step_of_frame=step_of_frame,
                           frame_t_s=frame_t, psi_runway_rad=psi_rwy, dpsi_rad=dpsi, dpsi_frame_rad=dpsi_frame,
                           frame_reason=reason, points_ok=pts, lines_ok=lines_ok)

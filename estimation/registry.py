@@ -3,7 +3,8 @@
 Two points: oj-2p ii-2p cccs-2p ccpi-hg-2p ccpi-hosm-2p cccj-2p kf-2p
 (:mod:`visland.estimation.points`, :mod:`visland.estimation.kalman`); two lines: oj-2l ii-2l
 ccpi-2l cccj-2l ekf-2l (:mod:`visland.estimation.lines`); the ECC'15 system: ecc-hg ecc-hosm
-(:mod:`visland.estimation.ecc`).
+(:mod:`visland.estimation.ecc`); the 4D approach of seed 004: dickmanns-4d
+(:mod:`visland.estimation.dickmanns`).
 """
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import importlib
 
 from visland.estimation.base import Observer
 
-__all__ = ["OBSERVERS", "OBSERVER_NAMES", "POINT_OBSERVERS", "LINE_OBSERVERS", "ECC_OBSERVERS",
+__all__ = ["OBSERVERS", "OBSERVER_NAMES", "POINT_OBSERVERS", "LINE_OBSERVERS", "ECC_OBSERVERS", "DICKMANNS_OBSERVERS",
            "observer_class", "make_observer", "observer_features"]
 
 #: name -> (module, class, features)
@@ -30,11 +31,13 @@ OBSERVERS = {
     "ekf-2l": ("visland.estimation.lines", "EKF2L", "lines"),
     "ecc-hg": ("visland.estimation.ecc", "EccHG", "points"),
     "ecc-hosm": ("visland.estimation.ecc", "EccHOSM", "points"),
+    "dickmanns-4d": ("visland.estimation.dickmanns", "Dickmanns4D", "lines"),
 }
 OBSERVER_NAMES = tuple(OBSERVERS)
 POINT_OBSERVERS = tuple(n for n in OBSERVER_NAMES if n.endswith("-2p"))
 LINE_OBSERVERS = tuple(n for n in OBSERVER_NAMES if n.endswith("-2l"))
 ECC_OBSERVERS = ("ecc-hg", "ecc-hosm")
+DICKMANNS_OBSERVERS = ("dickmanns-4d",)
 
 
 def observer_features(name: str) -> str:

@@ -26,7 +26,10 @@ class ObserverRun:
     """One observer's estimates at the camera frames (arrays of shape (m,), NaN = no estimate).
 
     ``step_time_s`` is the wall time spent in ``Observer.step`` over the whole run (the cost
-    the speed target is about); ``n_steps`` the number of steps taken.
+    the speed target is about); ``n_steps`` the number of steps taken. ``extras`` holds the
+    per-frame outputs an observer reports beyond the SPEC columns (``extra_outputs()``, e.g. the
+    wind of ``dickmanns-4d``); ``notes`` what the observer said once about the run (e.g. that it
+    cannot estimate the wind without airspeed).
     """
 
     observer: str
@@ -45,6 +48,8 @@ class ObserverRun:
     step_time_s: float
     n_steps: int
     params: dict = field(default_factory=dict)
+    extras: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
 
     def __len__(self):
         return len(self.t_s)
@@ -79,6 +84,9 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     steps = prepared.steps
     frame_of_step = prepared.frame_of_step
     has_points = hasattr(observer, "predicted_points_yv")
+    # observers whose state holds the deviations themselves (dickmanns-4d) report them directly
+    own_deviations = hasattr(observer, "deviations")
+    extras = {}
 
     last_correction = [float(steps[start].t_s)]
 
@@ -98,7 +106,13 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
         out["observability"][f] = estimate.observability
         coasting[f] = estimate.coasting
         reason[f] = estimate.reason if estimate.coasting else ""
-        if observer.features == "points":
+        if hasattr(observer, "extra_outputs"):
+            for key, value in observer.extra_outputs().items():
+                extras.setdefault(key, np.full(m, np.nan))[f] = value
+        if own_deviations:
+            dev = observer.deviations(aim_distance_m)
+            out["dx_m"][f], out["dy_m"][f], out["width_m"][f] = dev.dx_m, dev.dy_m, dev.width_m
+        elif observer.features == "points":
             # the observer's own (filtered) corners, unless it says they lag the measured ones
             own = has_points and not (inp.points_yv is not None and not observer.deviations_from_own_points)
             yv = observer.predicted_points_yv() if own else inp.points_yv
@@ -123,10 +137,14 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
         if frame_of_step[j] >= 0:
             record(j, estimate)
     params = observer.params.to_dict() if hasattr(observer.params, "to_dict") else {}
+    dpsi = prepared.dpsi_rad[prepared.step_of_frame]
+    if "dpsi_rad" in extras:             # an observer that corrects the heading deviation reports its own
+        dpsi = np.where(np.isfinite(extras["dpsi_rad"]), extras["dpsi_rad"], dpsi)
     return ObserverRun(observer=observer.name, features=observer.features, t_s=prepared.frame_t_s.copy(),
-                       coasting=coasting, reason=reason, dpsi_rad=prepared.dpsi_rad[prepared.step_of_frame],
+                       coasting=coasting, reason=reason, dpsi_rad=dpsi,
                        start_t_s=float(steps[start].t_s), dh0_m=float(dh0_m), step_time_s=elapsed,
-                       n_steps=len(steps) - start - 1, params=params, **out)
+                       n_steps=len(steps) - start - 1, params=params, extras=extras,
+                       notes=list(getattr(observer, "notes", ())), **out)
 
 
 def _initial_estimate(observer, inp, dh0_m):

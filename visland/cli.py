@@ -67,6 +67,10 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
                         help="constant relative IMU velocity bias, e.g. 0.05 for 5 %% (thesis 5.2.2.3)")
     parser.add_argument("--imu-noise", type=float, default=0.0, metavar="SCALE",
                         help="IMU white noise: SCALE x (0.05 deg attitude, 0.1 deg/s rates, 0.1 m/s velocity)")
+    parser.add_argument("--airspeed-noise", type=float, default=0.5, metavar="MPS",
+                        help="white noise of the true airspeed written as telemetry column tas_mps (default 0.5 m/s)")
+    parser.add_argument("--no-airspeed", action="store_true",
+                        help="leave the true airspeed (tas_mps) out of the telemetry: no wind estimation")
     parser.add_argument("--force", action="store_true", help="replace an existing output folder")
 
 
@@ -93,7 +97,8 @@ def simulation_options_from_args(args, camera=None):
         raise ValueError(f"--imu-noise must be non-negative, got {args.imu_noise}")
     imu = ImuParams(velocity_bias_fraction=args.velocity_bias, velocity_noise_mps=0.1 * args.imu_noise,
                     attitude_noise_deg=0.05 * args.imu_noise, rate_noise_dps=0.1 * args.imu_noise,
-                    seed=args.seed)
+                    seed=args.seed, airspeed=not getattr(args, "no_airspeed", False),
+                    airspeed_noise_mps=getattr(args, "airspeed_noise", 0.5))
     return SimulationOptions(fps=args.fps, camera=camera or CameraModel.default(),
                              pixel_noise_px=getattr(args, "pixel_noise", 0.0),
                              calibration_error_deg=args.calibration_error, imu=imu, seed=args.seed)

@@ -7,7 +7,8 @@ a reader never sees half a file.
 
 Schemas (columns in this order; "more columns may follow" where SPEC says so):
 
-- ``telemetry.csv``: :data:`TELEMETRY_COLUMNS`, inertial data at >= the frame rate.
+- ``telemetry.csv``: :data:`TELEMETRY_COLUMNS`, inertial data at >= the frame rate, then the
+  optional :data:`TELEMETRY_OPTIONAL_COLUMNS` (true airspeed ``tas_mps``).
 - ``truth.csv``: :data:`TRUTH_COLUMNS` then :data:`TRUTH_EXTRA_COLUMNS`, one row per frame.
 - ``labels.csv``: :data:`LABEL_COLUMNS` then :data:`LABEL_EXTRA_COLUMNS`, one row per frame.
 - ``measurements.csv``: :data:`MEASUREMENT_COLUMNS` (labels schema + source, found, reason,
@@ -30,17 +31,18 @@ from pathlib import Path
 import numpy as np
 
 from visland.runway import CORNER_NAMES
-from visland.sensors import TELEMETRY_COLUMNS
+from visland.sensors import TELEMETRY_COLUMNS, TELEMETRY_OPTIONAL_COLUMNS
 
 __all__ = [
-    "TELEMETRY_COLUMNS", "TRUTH_COLUMNS", "TRUTH_EXTRA_COLUMNS", "LABEL_COLUMNS", "LABEL_EXTRA_COLUMNS",
+    "TELEMETRY_COLUMNS", "TELEMETRY_OPTIONAL_COLUMNS", "TRUTH_COLUMNS", "TRUTH_EXTRA_COLUMNS", "LABEL_COLUMNS", "LABEL_EXTRA_COLUMNS",
     "MEASUREMENT_COLUMNS", "ESTIMATE_COLUMNS", "ESTIMATE_EXTRA_COLUMNS", "FRAMES_COLUMNS", "Table", "read_csv", "write_csv",
     "read_telemetry", "read_truth", "read_labels", "read_measurements", "read_frames_csv", "read_estimates",
     "atomic_write_text", "atomic_write_bytes", "staged_output_dir", "check_time_column", "json_ready",
 ]
 
 TRUTH_COLUMNS = ("t_s", "dx_m", "dy_m", "dh_m", "roll_deg", "pitch_deg", "dpsi_deg")
-TRUTH_EXTRA_COLUMNS = ("frame", "dgs_m", "heading_deg", "vx_runway_mps", "vy_runway_mps", "vz_runway_mps")
+TRUTH_EXTRA_COLUMNS = ("frame", "dgs_m", "heading_deg", "vx_runway_mps", "vy_runway_mps", "vz_runway_mps",
+                       "wind_x_runway_mps", "wind_y_runway_mps", "wind_z_runway_mps")
 
 LABEL_COLUMNS = (
     ("frame", "t_s")
@@ -54,9 +56,10 @@ LABEL_EXTRA_COLUMNS = ("yv1_near_left", "yv2_near_left", "yv1_near_right", "yv2_
                        "obs_points", "obs_lines")
 MEASUREMENT_COLUMNS = LABEL_COLUMNS + ("source", "found", "reason", "confidence")
 ESTIMATE_COLUMNS = ("observer", "t_s", "dx_m", "dy_m", "dh_m", "width_m", "dpsi_deg", "observability")
-#: 1 where no measurement corrected the frame (the observer ran on its model, or its estimate
-#: was withheld after a long gap: then the estimate cells are empty).
-ESTIMATE_EXTRA_COLUMNS = ("coasting",)
+#: ``coasting``: 1 where no measurement corrected the frame (the observer ran on its model, or its
+#: estimate was withheld after a long gap: then the estimate cells are empty); ``wind_x_mps``,
+#: ``wind_y_mps``: the horizontal wind in runway axes, empty for observers that do not estimate it.
+ESTIMATE_EXTRA_COLUMNS = ("coasting", "wind_x_mps", "wind_y_mps")
 FRAMES_COLUMNS = ("frame", "t_s")
 
 #: Label/measurement columns that may be empty (not visible, not measured).
@@ -270,9 +273,17 @@ def check_time_column(table: Table, column: str = "t_s", strictly: bool = True) 
 
 
 def read_telemetry(path) -> Table:
-    """``telemetry.csv``: all SPEC columns, finite, strictly increasing time."""
+    """``telemetry.csv``: all SPEC columns, finite, strictly increasing time; the optional
+    ``tas_mps`` (true airspeed), when present, positive and finite on every line."""
     table = read_csv(path, TELEMETRY_COLUMNS)
     check_time_column(table)
+    for column in TELEMETRY_OPTIONAL_COLUMNS:
+        if column in table:
+            bad = np.nonzero(~(np.isfinite(table[column]) & (table[column] > 0)))[0]
+            if bad.size:
+                i = int(bad[0])
+                raise ValueError(f"{table.path} line {i + 2}: column '{column}' is {table[column][i]:g} "
+                                 "(a positive airspeed in m/s is required on every line, or no column)")
     return table
 
 

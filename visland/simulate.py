@@ -15,7 +15,7 @@ import numpy as np
 
 from visland import __version__
 from visland.camera import CameraModel
-from visland.contracts import (LABEL_COLUMNS, LABEL_EXTRA_COLUMNS, TELEMETRY_COLUMNS, TRUTH_COLUMNS,
+from visland.contracts import (LABEL_COLUMNS, LABEL_EXTRA_COLUMNS, TRUTH_COLUMNS,
                                TRUTH_EXTRA_COLUMNS, atomic_write_text, staged_output_dir, write_csv)
 from visland.features import IdealFeatures, ideal_features
 from visland.flight import FT_TO_M, FrameStates, Trajectory, simulate_flight
@@ -89,7 +89,15 @@ class SimulationResult:
             "heading_deg": np.degrees(s.heading_rad) % 360.0,
             "vx_runway_mps": s.v_runway_mps[:, 0], "vy_runway_mps": s.v_runway_mps[:, 1],
             "vz_runway_mps": s.v_runway_mps[:, 2],
+            **self._wind_columns(),
         }
+
+    def _wind_columns(self) -> dict:
+        """Wind in runway axes at the frame times (truth for the wind-estimating observers)."""
+        tr = self.trajectory
+        wind = tr.wind_ned_mps @ tr.R_runway_from_ned.T
+        t = self.frames.t_s
+        return {f"wind_{axis}_runway_mps": np.interp(t, tr.t_s, wind[:, k]) for k, axis in enumerate("xyz")}
 
     def label_columns(self) -> dict:
         cols = self.features.as_columns()
@@ -131,7 +139,7 @@ def write_simulation_files(result: SimulationResult, folder) -> None:
     """Write the SPEC files of ``result`` into an existing ``folder`` (each file atomically)."""
     from pathlib import Path
     folder = Path(folder)
-    write_csv(folder / "telemetry.csv", result.imu.as_columns(), TELEMETRY_COLUMNS)
+    write_csv(folder / "telemetry.csv", result.imu.as_columns(), result.imu.columns_written)
     write_csv(folder / "truth.csv", result.truth_columns(), TRUTH_COLUMNS + TRUTH_EXTRA_COLUMNS)
     write_csv(folder / "labels.csv", result.label_columns(), LABEL_COLUMNS + LABEL_EXTRA_COLUMNS)
     atomic_write_text(folder / "camera.json", json.dumps(result.options.camera.to_json_dict(), indent=2) + "\n")

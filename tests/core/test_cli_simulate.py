@@ -24,7 +24,7 @@ def test_simulate_writes_the_spec_files(tmp_path, capsys):
     assert "400 ft" in printed and "100 ft" in printed and "threshold" in printed
     names = sorted(p.name for p in out.iterdir())
     assert names == ["camera.json", "labels.csv", "manifest.json", "runway.json", "telemetry.csv", "truth.csv"]
-    assert _header(out / "telemetry.csv") == list(TELEMETRY_COLUMNS)
+    assert _header(out / "telemetry.csv") == list(TELEMETRY_COLUMNS) + ["tas_mps"]
     assert _header(out / "truth.csv")[:len(TRUTH_COLUMNS)] == list(TRUTH_COLUMNS)
     assert _header(out / "labels.csv")[:len(LABEL_COLUMNS)] == list(LABEL_COLUMNS)
     telemetry, truth, labels = read_telemetry(out / "telemetry.csv"), read_truth(out / "truth.csv"), read_labels(out / "labels.csv")
@@ -37,6 +37,19 @@ def test_simulate_writes_the_spec_files(tmp_path, capsys):
     # truth and labels agree at the first frame: dX of the scenario, corners visible
     assert truth["dx_m"][0] == pytest.approx(-5000.0)
     assert labels["near_left_visible"][0] == 1
+
+
+def test_airspeed_column_and_wind_truth(tmp_path):
+    out = tmp_path / "wind"
+    assert main(["simulate", "--scenario", "dickmanns-wind", "--out", str(out), "--airspeed-noise", "0"]) == 0
+    telemetry, truth = read_telemetry(out / "telemetry.csv"), read_truth(out / "truth.csv")
+    np.testing.assert_allclose(telemetry["tas_mps"], 140 * 1852 / 3600, rtol=1e-6)
+    # -1 m/s of crosswind from 800 m before the threshold, then the gust's +2 m/s (seed 004, 7.1)
+    assert truth["wind_y_runway_mps"][0] == 0.0 and truth["wind_y_runway_mps"].min() == pytest.approx(-1.0)
+    assert truth["wind_y_runway_mps"].max() == pytest.approx(1.0, abs=0.05)
+    quiet = tmp_path / "no-airspeed"
+    assert main(["simulate", "--scenario", "thesis-1", "--out", str(quiet), "--no-airspeed"]) == 0
+    assert _header(quiet / "telemetry.csv") == list(TELEMETRY_COLUMNS)
 
 
 def test_existing_output_is_refused_unless_forced(tmp_path, capsys):

@@ -35,6 +35,20 @@ def test_bad_telemetry_is_named(tmp_path, rows, match):
     assert str(path) in str(info.value)
 
 
+@pytest.mark.parametrize("value, match", [("0", "line 3: column 'tas_mps' is 0"),
+                                          ("", "line 3: column 'tas_mps' is nan"),
+                                          ("-3", "line 3: column 'tas_mps' is -3")])
+def test_optional_airspeed_must_be_positive_on_every_line(tmp_path, value, match):
+    path = tmp_path / "telemetry.csv"
+    rows = [[0, 0, 0, 0, 0, 0, 0, 70, 0, 0, 72.0], [0.02, 0, 0, 0, 0, 0, 0, 70, 0, 0, value]]
+    path.write_text(",".join(TELEMETRY_COLUMNS) + ",tas_mps\n" + "".join(",".join(str(v) for v in r) + "\n" for r in rows))
+    with pytest.raises(ValueError, match=match):
+        read_telemetry(path)
+    rows[1][-1] = 72.5
+    path.write_text(",".join(TELEMETRY_COLUMNS) + ",tas_mps\n" + "".join(",".join(str(v) for v in r) + "\n" for r in rows))
+    np.testing.assert_allclose(read_telemetry(path)["tas_mps"], [72.0, 72.5])
+
+
 def test_missing_column_is_named(tmp_path):
     path = tmp_path / "telemetry.csv"
     path.write_text("t_s,roll_deg\n0,0\n")

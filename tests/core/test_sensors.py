@@ -37,7 +37,8 @@ def test_noise_is_seeded_and_sized(trajectory):
 def test_telemetry_columns_are_in_spec_units(trajectory):
     cols = measure_imu(trajectory).as_columns()
     assert list(cols) == ["t_s", "roll_deg", "pitch_deg", "heading_deg", "p_dps", "q_dps", "r_dps",
-                          "vn_mps", "ve_mps", "vd_mps"]
+                          "vn_mps", "ve_mps", "vd_mps", "tas_mps"]
+    assert list(measure_imu(trajectory, ImuParams(airspeed=False)).as_columns()) == list(cols)[:-1]
     assert np.all((cols["heading_deg"] >= 0) & (cols["heading_deg"] < 360))
 
 
@@ -51,3 +52,22 @@ def test_calibration_error_turns_the_image():
     assert abs(uv_mounted[0] - uv_nominal[0]) == pytest.approx(camera.fx * math.tan(math.radians(0.5)), rel=1e-3)
     with pytest.raises(ValueError, match="calibration error"):
         camera_with_calibration_error(camera, 45.0)
+
+
+def test_airspeed_is_the_air_velocity_magnitude_with_seeded_noise():
+    trajectory = simulate_flight(get_scenario("dickmanns-wind"))
+    air = np.linalg.norm(trajectory.v_ned_mps - trajectory.wind_ned_mps, axis=1)
+    # the flight model flies at constant airspeed through the crosswind and the gust
+    np.testing.assert_allclose(air, get_scenario("dickmanns-wind").airspeed_mps, rtol=1e-9)
+    exact = measure_imu(trajectory, ImuParams(airspeed_noise_mps=0.0))
+    np.testing.assert_allclose(exact.tas_mps, air)
+    noisy = measure_imu(trajectory, ImuParams(airspeed_noise_mps=0.5, seed=4))
+    assert np.std(noisy.tas_mps - air) == pytest.approx(0.5, rel=0.05)
+    # switching the airspeed noise on leaves the other streams' realisations unchanged
+    other = ImuParams(velocity_noise_mps=0.2, seed=4)
+    a = measure_imu(trajectory, other)
+    b = measure_imu(trajectory, ImuParams(velocity_noise_mps=0.2, seed=4, airspeed_noise_mps=2.0))
+    np.testing.assert_array_equal(a.v_ned_mps, b.v_ned_mps)
+    assert measure_imu(trajectory, ImuParams(airspeed=False)).tas_mps is None
+    with pytest.raises(ValueError, match="airspeed_noise_mps"):
+        ImuParams(airspeed_noise_mps=-1.0)
