@@ -108,6 +108,16 @@ class DetectorParams(ParamsFile):
         Over a sequence: threshold corners farther than ``max_threshold_jump_px +
         max_threshold_jump_fraction * threshold width`` per frame (at ``reference_rate_hz``)
         from the last good detection's are dropped (the edges and d_F are kept).
+    threshold_track_s : float
+        Over a sequence: the threshold's width in pixels ``w`` is followed over this many
+        seconds of accepted frames; at a steady ground speed ``1 / w = x / (f W)`` falls
+        linearly with time whatever the height (``x``: distance to the threshold, ``W``: the
+        runway's width), so three or more accepted widths predict the next one.
+    threshold_width_tolerance_px, threshold_width_tolerance_fraction : float
+        A threshold whose width differs from the track's prediction by more than
+        ``threshold_width_tolerance_px + threshold_width_tolerance_fraction * predicted width``
+        is not the threshold followed so far (a marking, a joining pavement): its corners are
+        withheld.
     reference_rate_hz : float
         Frame rate the per-frame limits above are given for.
     reference_side_px : int
@@ -154,6 +164,9 @@ class DetectorParams(ParamsFile):
     max_vp_jump_rate_pxps: float = 250.0
     max_threshold_jump_px: float = 6.0
     max_threshold_jump_fraction: float = 0.12
+    threshold_track_s: float = 2.0
+    threshold_width_tolerance_px: float = 2.0
+    threshold_width_tolerance_fraction: float = 0.04
     reference_rate_hz: float = 25.0
     reference_side_px: int = 2048
 
@@ -206,6 +219,9 @@ class DetectorParams(ParamsFile):
         number("max_vp_jump_rate_pxps", 0.0, 1e6)
         number("max_threshold_jump_px", 0.0, 100000.0)
         number("max_threshold_jump_fraction", 0.0, 100.0)
+        number("threshold_track_s", 0.1, 60.0)
+        number("threshold_width_tolerance_px", 0.0, 1000.0)
+        number("threshold_width_tolerance_fraction", 0.0, 10.0)
         number("reference_rate_hz", 0.1, 10000.0)
         number("min_confidence", 0.0, 1.0)
         number("horizon_margin_px", 0.0, 100000.0)
@@ -235,6 +251,7 @@ class DetectorParams(ParamsFile):
             horizon_margin_px=self.horizon_margin_px * k,
             max_vp_jump_px=self.max_vp_jump_px * k,
             max_vp_jump_rate_pxps=self.max_vp_jump_rate_pxps * k,
-            max_threshold_jump_px=self.max_threshold_jump_px * k)
+            max_threshold_jump_px=self.max_threshold_jump_px * k,
+            threshold_width_tolerance_px=self.threshold_width_tolerance_px * k)
 
     # ----------------------------------------------------------------- files

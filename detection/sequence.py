@@ -13,8 +13,13 @@ tracking when its edges turned, or its vanishing point moved, more than the runw
 the two frames (``max_edge_turn_*``, ``max_vp_jump_*``: the pair must be consistent over time,
 issue item 2). A refused detection is reported not found, with the reason. Threshold corners
 that jump since the prior (the touchdown-zone bars taken for the threshold for one frame) are
-dropped from an otherwise good detection (``max_threshold_jump_*``). After ``hold_s`` without a
-good detection the next search starts afresh.
+dropped from an otherwise good detection (``max_threshold_jump_*``). The threshold is also
+followed as a track: at a steady ground speed the reciprocal of its width in pixels,
+``1 / w = x / (f W)``, falls linearly with time whatever the height, so the widths of the last
+``threshold_track_s`` seconds predict the next one; a threshold off that prediction (a marking
+or a pavement joining the runway taken for it) has its corners withheld, and three rejections in
+a row that agree with each other start the track afresh. After ``hold_s`` without a good
+detection the next search starts afresh.
 """
 from __future__ import annotations
 
@@ -50,11 +55,15 @@ class DetectionSequence:
         self.params = params.scaled_to(camera.width)
         self.last_good: DetectionResult | None = None
         self.t_good_s: float | None = None
+        self.threshold_track: list[tuple[float, float]] = []      # (t_s, width_px) accepted
+        self.threshold_rejected: list[tuple[float, float]] = []   # rejected in a row
 
     def reset(self) -> None:
-        """Forget the last good detection (the next frame is searched afresh)."""
+        """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
         self.last_good = None
         self.t_good_s = None
+        self.threshold_track = []
+        self.threshold_rejected = []
 
     def __call__(self, image, roll_rad: float, pitch_rad: float, t_s: float) -> DetectionResult:
         """Detect the runway in the frame at ``t_s`` (seconds, increasing)."""
@@ -71,6 +80,8 @@ class DetectionSequence:
                                    mode=result.mode, image_size=result.image_size, elapsed_s=result.elapsed_s)
         if result.found and prior is not None:
             result = self._check_threshold(result, prior, dt)
+        if result.found:
+            result = self._follow_threshold(result, float(t_s))
         if result.found:
             self.last_good = result
             self.t_good_s = float(t_s)
@@ -97,6 +108,41 @@ class DetectionSequence:
         return replace(result, corners_uv=corners, corners_found=found, threshold_line=(math.nan, math.nan),
                        reason="; ".join(filter(None, [result.reason, note])), notes=result.notes + (note,))
 
+    def _follow_threshold(self, result: DetectionResult, t_s: float) -> DetectionResult:
+        """Check the threshold's width against its track (module docstring); update the track."""
+        if not result.corners_found[:2].all():
+            return result
+        width = float(np.hypot(*(result.corners_uv[1] - result.corners_uv[0])))
+        p = self.params
+        track = [(t, w) for t, w in self.threshold_track if t_s - p.threshold_track_s <= t < t_s]
+        self.threshold_track = track
+        if len(track) >= 3:
+            times = np.array([t for t, _ in track])
+            inverse = np.array([1.0 / w for _, w in track])
+            slope, offset = np.polyfit(times - t_s, inverse, 1)
+            predicted = 1.0 / offset if offset > 0 else math.inf
+            tolerance = p.threshold_width_tolerance_px + p.threshold_width_tolerance_fraction * predicted
+            if not abs(width - predicted) <= tolerance:
+                rejected = [(t, w) for t, w in self.threshold_rejected if t_s - p.threshold_track_s <= t < t_s]
+                rejected.append((t_s, width))
+                self.threshold_rejected = rejected
+                if len(rejected) >= 3 and _consistent(rejected, p):
+                    # the track itself was the wrong object (or the runway was lost and found again)
+                    self.threshold_track = rejected
+                    self.threshold_rejected = []
+                    return result
+                note = (f"threshold withheld: {width:.1f} px wide where its track predicts {predicted:.1f} px "
+                        f"(tolerance {tolerance:.1f})")
+                corners = result.corners_uv.copy()
+                corners[:2] = np.nan
+                found = result.corners_found.copy()
+                found[:2] = False
+                return replace(result, corners_uv=corners, corners_found=found, threshold_line=(math.nan, math.nan),
+                               reason="; ".join(filter(None, [result.reason, note])), notes=result.notes + (note,))
+        self.threshold_rejected = []
+        self.threshold_track = track + [(t_s, width)]
+        return result
+
     def _inconsistency(self, result: DetectionResult, prior: DetectionResult, dt: float) -> str:
         p = self.params
         turn_limit = p.max_edge_turn_rad + p.max_edge_turn_rate_rps * dt
@@ -114,3 +160,13 @@ class DetectionSequence:
             if jump > jump_limit:
                 return f"the vanishing point moved {jump:.0f} px along the horizon (> {jump_limit:.0f})"
         return ""
+
+
+def _consistent(samples: list, params: DetectorParams) -> bool:
+    """Do ``(t, width)`` samples follow one line in ``1 / width`` (a track of their own)?"""
+    times = np.array([t for t, _ in samples])
+    widths = np.array([w for _, w in samples])
+    slope, offset = np.polyfit(times - times[-1], 1.0 / widths, 1)
+    fitted = 1.0 / (slope * (times - times[-1]) + offset)
+    tolerance = params.threshold_width_tolerance_px + params.threshold_width_tolerance_fraction * widths
+    return bool(np.all(np.abs(fitted - widths) <= tolerance))

@@ -92,3 +92,35 @@ def test_bad_arguments_are_named():
         seq_module.DetectionSequence("camera")
     with pytest.raises(ValueError, match="params"):
         seq_module.DetectionSequence(CAMERA, params={})
+
+
+def _widths_of_an_approach(n, dt=0.2, x0_m=1500.0, ground_speed_mps=70.0, runway_width_m=40.0):
+    """Threshold widths (px) at 5 Hz: f W / x with x falling at the ground speed (closed form)."""
+    x = x0_m - ground_speed_mps * dt * np.arange(n)
+    return CAMERA.fx * runway_width_m / x
+
+
+def test_the_threshold_track_withholds_a_threshold_off_its_width(scripted):
+    # frames 0-4 follow the approach; frame 5 takes the edge of a taxiway joining the runway
+    # 250 m past the threshold (narrower by 250/x of its width, 15 % at 1.4 km: within the
+    # jump limit at 5 Hz, not within the track's)
+    widths = _widths_of_an_approach(8)
+    wrong = CAMERA.fx * 40.0 / (1500.0 - 70.0 * 0.2 * 5 + 250.0)
+    script = [_result(width=w) for w in widths[:5]] + [_result(width=wrong)] + [_result(width=w) for w in widths[6:]]
+    scripted(script)
+    results = _run(seq_module.DetectionSequence(CAMERA), 8, dt=0.2)
+    assert all(r.corners_found[:2].all() for r in results[:5])
+    assert not results[5].corners_found[:2].any() and "threshold withheld" in results[5].reason
+    assert results[5].corners_found[2:].all() and results[5].found
+    assert all(r.corners_found[:2].all() for r in results[6:])
+
+
+def test_a_new_track_replaces_a_wrong_one_after_three_agreeing_rejections(scripted):
+    # the first three frames followed a wrong object; from frame 3 on, the true threshold
+    wrong = 0.8 * _widths_of_an_approach(3)
+    right = _widths_of_an_approach(9)[3:]
+    scripted([_result(width=w) for w in list(wrong) + list(right)])
+    results = _run(seq_module.DetectionSequence(CAMERA), 9, dt=0.2)
+    withheld = [not r.corners_found[:2].any() for r in results]
+    assert withheld[3] and withheld[4]            # off the old track ...
+    assert not any(withheld[5:])                  # ... until three agreeing ones start a new one
