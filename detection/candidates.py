@@ -28,8 +28,15 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
-from visland.detection.refine import sample_profiles, transition_offsets
+from visland.detection.refine import SLOPE_PER_STEP, sample_profiles, transition_offsets
 
+#: Median absolute deviation to standard deviation (Gaussian noise).
+MAD_TO_SIGMA = 1.4826
+#: Tukey biweight cut-off, in robust sigmas (95 % efficiency under Gaussian noise).
+TUKEY_C = 4.685
+#: sqrt(pi / 2): Gaussian residuals' mean absolute value times this is their standard deviation
+#: (applied to the median absolute residual, its robust stand-in).
+MEDIAN_ABS_TO_SIGMA = 1.2533
 __all__ = ["Segments", "hough_segments", "CandidateLines", "candidate_lines", "check_lines", "pencil_normal_uv"]
 
 
@@ -96,7 +103,7 @@ def hough_segments(image: np.ndarray, roi: tuple, max_side_px: int, params: Dete
     magnitude = np.abs(gx) + np.abs(gy)                      # Canny's L1 gradient, on every other pixel
     low, high = np.quantile(magnitude, [params.canny_low_quantile, params.canny_high_quantile])
     high = max(float(high), params.canny_min_high)
-    low = min(max(float(low), 0.4 * high), high)
+    low = min(max(float(low), params.canny_min_low_ratio * high), high)
     edges = cv2.Canny(work, low, high, L2gradient=False)
     edge_fraction = float(np.count_nonzero(edges)) / edges.size
     min_length = params.hough_min_length_px if min_length_px is None else min_length_px
@@ -158,7 +165,7 @@ def candidate_lines(segments: Segments, horizon: HorizonFrame, params: DetectorP
         k = (b[:, 0] - a[:, 0]) / dd
     keep = (dd > 1.0) & (np.abs(k) <= params.max_edge_slope) & (a[:, 1] > min_depth_px)
     length = np.hypot(b[:, 0] - a[:, 0], dd)
-    keep &= length >= params.min_edge_length_px * 0.5
+    keep &= length >= params.min_edge_length_px * params.candidate_min_length_fraction
     if not np.any(keep):
         return CandidateLines(*(np.zeros(0) for _ in range(5)))
     a, b, k, dd, length = a[keep], b[keep], k[keep], dd[keep], length[keep]
@@ -180,7 +187,7 @@ def candidate_lines(segments: Segments, horizon: HorizonFrame, params: DetectorP
             # distance between the two lines at both ends of segment j and of segment i
             dj = np.array([a[j, 1], b[j, 1], a[i, 1], b[i, 1]])
             gap = np.abs((s0[i] + k[i] * dj) - (s0[j] + k[j] * dj)) / np.sqrt(1 + k[i] ** 2)
-            if gap.max() <= 1.5 * end_error + 0.5:
+            if gap.max() <= params.segment_merge_working_px * end_error + params.segment_merge_px:
                 group.append(j)
                 used[j] = True
         points = np.concatenate([a[group], b[group]])
@@ -201,34 +208,38 @@ def candidate_lines(segments: Segments, horizon: HorizonFrame, params: DetectorP
     return CandidateLines(m[:, 0], m[:, 1], m[:, 2], m[:, 3], m[:, 4])
 
 
-def check_lines(image, horizon: HorizonFrame, lines: CandidateLines, params: DetectorParams,
-                  n_samples: int = 48) -> CandidateLines:
+def check_lines(image, horizon: HorizonFrame, lines: CandidateLines, params: DetectorParams) -> CandidateLines:
     """Check each candidate line on the full-resolution frame and re-fit it.
 
     Hough segments found at the working resolution are often short, slightly turned pieces
     of an edge. Two passes: profiles across the line are sampled over its Hough span (band
-    +-6 px), the transition in each profile is located and the line ``s = s0 + k d``
-    re-fitted to them with a robust weight; then profiles are sampled around the re-fitted
-    line (band +-3 px) over its span extended by its length towards the horizon and one and
-    a half times towards the image bottom, the line is re-fitted again and its span becomes
-    the run of consistent points that holds the first span.
+    ``params.check_first_band_px``), the transition in each profile is located and the line
+    ``s = s0 + k d`` re-fitted to them with a robust weight; then profiles are sampled around the
+    re-fitted line (band ``params.check_second_band_px``) over its span extended by
+    ``params.check_extend_far`` times its length towards the horizon and
+    ``params.check_extend_near`` times towards the image bottom, the line is re-fitted again and
+    its span becomes the run of consistent points that holds the first span.
     Returns the lines with polarity (sign of the grey-level step towards +s), contrast
     (median step, grey levels) and support (fraction of the span's profiles holding the
     edge); duplicates (two Hough pieces of one edge) are merged.
     """
     if len(lines) == 0:
         return lines
+    n_samples = params.check_samples
+    extend = params.check_first_extend
     span = np.maximum(lines.d_b - lines.d_a, 4.0)
-    first = _evidence_pass(image, horizon, lines.s0, lines.k, np.maximum(lines.d_a - 0.1 * span, 1.0),
-                           lines.d_b + 0.1 * span, 6.0, n_samples // 2, params)
+    first = _evidence_pass(image, horizon, lines.s0, lines.k, np.maximum(lines.d_a - extend * span, 1.0),
+                           lines.d_b + extend * span, params.check_first_band_px, n_samples // 2, params)
     if len(first) == 0:
         return CandidateLines(*(np.zeros(0) for _ in range(5)))
     span = np.maximum(first[:, 3] - first[:, 2], 4.0)
-    second = _evidence_pass(image, horizon, first[:, 0], first[:, 1], np.maximum(first[:, 2] - span, 1.0),
-                            first[:, 3] + 1.5 * span, 3.0, n_samples, params, keep=(first[:, 2], first[:, 3]))
+    second = _evidence_pass(image, horizon, first[:, 0], first[:, 1],
+                            np.maximum(first[:, 2] - params.check_extend_far * span, 1.0),
+                            first[:, 3] + params.check_extend_near * span, params.check_second_band_px, n_samples,
+                            params, keep=(first[:, 2], first[:, 3]))
     if len(second) == 0:
         return CandidateLines(*(np.zeros(0) for _ in range(5)))
-    arr = _merge_duplicates(second)
+    arr = _merge_duplicates(second, params.duplicate_gap_px)
     return CandidateLines(arr[:, 0], arr[:, 1], arr[:, 2], arr[:, 3], arr[:, 4], arr[:, 5].astype(int), arr[:, 6],
                        arr[:, 7])
 
@@ -244,27 +255,27 @@ def _evidence_pass(image, horizon: HorizonFrame, s0_lines, k_lines, d_lo, d_hi, 
     profiles, offsets = sample_profiles(image, centres, normal, direction, halfwidth_px + 6.0)
     window = np.broadcast_to(np.abs(offsets)[None, :] <= halfwidth_px, profiles.shape)
     position, strength, net = transition_offsets(profiles, offsets, window)
-    contrast_all = (strength / 0.3).reshape(n, n_samples)
+    contrast_all = (strength / SLOPE_PER_STEP).reshape(n, n_samples)
     step = net.reshape(n, n_samples)
     edge_s = (s0_lines[:, None] + k_lines[:, None] * d) \
         + position.reshape(n, n_samples) * np.sqrt(1 + k_lines[:, None] ** 2)
     out = []
     for i in range(n):
         ok = np.isfinite(edge_s[i]) & (contrast_all[i] >= params.min_contrast) & np.isfinite(step[i])
-        if ok.sum() < 6:
+        if ok.sum() < params.check_min_points:
             continue
         polarity = int(np.sign(np.median(step[i][ok])))
         ok &= np.sign(step[i]) == polarity
-        if ok.sum() < 6 or polarity == 0:
+        if ok.sum() < params.check_min_points or polarity == 0:
             continue
-        fit = _robust_pencil_fit(d[i][ok], edge_s[i][ok], contrast_all[i][ok])
+        fit = _robust_pencil_fit(d[i][ok], edge_s[i][ok], contrast_all[i][ok], params.pencil_fit_min_sigma_px)
         if fit is None:
             continue
         s0, k, inlier = fit
         depth_ok = d[i][ok][inlier]
         # longest run of inliers without a gap of more than a fifth of the sampled span
         order = np.sort(depth_ok)
-        gap = 0.2 * (d_hi[i] - d_lo[i])
+        gap = params.check_max_gap_fraction * (d_hi[i] - d_lo[i])
         breaks = np.nonzero(np.diff(order) > gap)[0]
         starts = np.concatenate([[0], breaks + 1])
         ends = np.concatenate([breaks + 1, [len(order)]])
@@ -275,26 +286,27 @@ def _evidence_pass(image, horizon: HorizonFrame, s0_lines, k_lines, d_lo, d_hi, 
                        for a, b in zip(starts, ends)]
             best = int(np.argmax(overlap))
         run = order[starts[best]:ends[best]]
-        if len(run) < 4:
+        if len(run) < params.check_min_run_points:
             continue
         d_a, d_b = float(run[0]), float(run[-1])
         in_span = np.count_nonzero((d[i] >= d_a) & (d[i] <= d_b))
         support = len(run) / max(in_span, 1)
         contrast = float(np.median(contrast_all[i][ok][inlier]))
         length = (d_b - d_a) * math.sqrt(1 + k * k)
-        if length < 0.5 * params.min_edge_length_px:
+        if length < params.candidate_min_length_fraction * params.min_edge_length_px:
             continue
         residual = np.abs(edge_s[i][ok][inlier] - (s0 + k * depth_ok)) / math.sqrt(1 + k * k)
-        sigma_px = max(1.2533 * float(np.median(residual)), 0.2)
+        sigma_px = max(MEDIAN_ABS_TO_SIGMA * float(np.median(residual)), 0.2)
         spread = max(float(np.std(run)), 1.0)
         # horizon crossing uncertainty: offset and slope errors extrapolated from the run's middle
         sigma_s0 = sigma_px * math.sqrt(1 + k * k) * math.hypot(1.0, 0.5 * (d_a + d_b) / spread) / math.sqrt(len(run))
-        out.append((s0, k, d_a, d_b, max(sigma_s0, 0.3), polarity, contrast, support))
+        out.append((s0, k, d_a, d_b, max(sigma_s0, params.crossing_min_sigma_px), polarity, contrast, support))
     return np.array(out, dtype=float).reshape(-1, 8)
 
 
-def _robust_pencil_fit(d, s, weights, iterations: int = 5):
-    """Fit ``s = s0 + k d`` with Tukey re-weighting; returns (s0, k, inlier mask) or None."""
+def _robust_pencil_fit(d, s, weights, min_sigma: float, iterations: int = 5):
+    """Fit ``s = s0 + k d`` with Tukey re-weighting (robust scale floored at ``min_sigma``);
+    returns (s0, k, inlier mask) or None."""
     w0 = np.minimum(weights, np.percentile(weights, 90))
     w = w0.copy()
     A = np.stack([np.ones_like(d), d], axis=1)
@@ -308,8 +320,8 @@ def _robust_pencil_fit(d, s, weights, iterations: int = 5):
         except np.linalg.LinAlgError:
             return None
         r = s - A @ coef
-        scale = max(1.4826 * float(np.median(np.abs(r[w > 0]))), 0.3)
-        u = r / (4.685 * scale)
+        scale = max(MAD_TO_SIGMA * float(np.median(np.abs(r[w > 0]))), min_sigma)
+        u = r / (TUKEY_C * scale)
         w = w0 * np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
     inlier = w > 0
     if inlier.sum() < 4:
@@ -317,8 +329,9 @@ def _robust_pencil_fit(d, s, weights, iterations: int = 5):
     return float(coef[0]), float(coef[1]), inlier
 
 
-def _merge_duplicates(arr: np.ndarray) -> np.ndarray:
-    """Keep one of several candidates describing one edge (same crossing, slope and polarity)."""
+def _merge_duplicates(arr: np.ndarray, max_gap_px: float) -> np.ndarray:
+    """Keep one of several candidates describing one edge (same crossing, slope and polarity:
+    within ``max_gap_px`` of each other over their common span)."""
     order = np.argsort(-(arr[:, 3] - arr[:, 2]) * arr[:, 7])
     kept = []
     for i in order:
@@ -331,7 +344,7 @@ def _merge_duplicates(arr: np.ndarray) -> np.ndarray:
             if depths[1] < depths[0]:
                 depths = np.array([d_a, d_b])
             gap = np.abs((s0 + k * depths) - (arr[j, 0] + arr[j, 1] * depths)) / math.sqrt(1 + k * k)
-            if gap.max() < 1.0:
+            if gap.max() < max_gap_px:
                 duplicate = True
                 break
         if not duplicate:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -31,7 +32,7 @@ from visland.camera import CameraModel
 from visland.detection.candidates import candidate_lines, check_lines, hough_segments
 from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
-from visland.detection.refine import LineFit, PixelLine, chroma_boundary, refine_line
+from visland.detection.refine import LineFit, NoFit, PixelLine, chroma_boundary, refine_line
 from visland.detection.result import DetectionResult, not_found
 from visland.detection.transverse import find_transverse_line, surface_extent
 from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
@@ -91,7 +92,7 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     params = params or DetectorParams()
     if not isinstance(params, DetectorParams):
         raise ValueError(f"params must be a DetectorParams, got {type(params).__name__}")
-    params = params.scaled_to(camera.width)
+    params = params.scaled_to(camera)
     if previous is not None and not isinstance(previous, DetectionResult):
         raise ValueError(f"previous must be a DetectionResult or None, got {type(previous).__name__}")
 
@@ -292,7 +293,7 @@ def _image_span(line: PixelLine, width: int, height: int, margin: float = 1.0) -
 
 
 def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slope: float,
-                 halfwidth_px: float, band_fraction: float = 0.1, iterations: int | None = None) -> LineFit | None:
+                 halfwidth_px: float, band_fraction: float = 0.1, iterations: int | None = None) -> LineFit | NoFit:
     """Sub-pixel edge along the pencil line (s0, k) between depths ``d_far`` and ``d_near``.
 
     ``outward_s`` is the side (in s) of the runway's outside; ``width_slope`` the runway's width
@@ -308,7 +309,7 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
     img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, params.search_halfwidth_px + 4)
     t_lo, t_hi = max(t_lo, img_lo), min(t_hi, img_hi)
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi - t_lo < params.min_edge_length_px:
-        return None
+        return NoFit(f"its candidate lies in the image over less than {params.min_edge_length_px:.0f} px")
     towards_s = (horizon.t_uv - k * horizon.n_uv) / scale      # unit normal towards +s
     sign = 1 if line.normal @ towards_s > 0 else -1
 
@@ -325,10 +326,8 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
         return np.clip(band_fraction * width, 2.0, halfwidth_px)
 
     def refine(image):
-        return refine_line(image, line, (t_lo, t_hi), "edge", polarity=0,
-                           halfwidth_px=band, n_samples=params.refine_samples,
-                           iterations=iterations or params.refine_iterations, min_contrast=params.min_contrast,
-                           outward=outward_s * sign, outward_reach_px=reach)
+        return refine_line(image, line, (t_lo, t_hi), "edge", polarity=0, halfwidth_px=band,
+                           outward=outward_s * sign, outward_reach_px=reach, params=params, iterations=iterations)
 
     fit = refine(ctx.image)
     if ctx.colour is None:
@@ -336,19 +335,19 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
     # grey pavement against coloured ground: the chroma steps at the edge even where the side
     # stripe, blended with the asphalt, has the grass's grey level (then the grey step is weak
     # or sits on the stripe's inner edge)
-    if fit is None or fit.extent[1] - fit.extent[0] < 0.5 * (t_hi - t_lo):
+    if not fit or fit.extent[1] - fit.extent[0] < 0.5 * (t_hi - t_lo):
         on_chroma = refine(ctx.colour)
-        if on_chroma is not None and (fit is None or on_chroma.extent[1] - on_chroma.extent[0]
-                                      > fit.extent[1] - fit.extent[0]):
+        if on_chroma and (not fit or on_chroma.extent[1] - on_chroma.extent[0] > fit.extent[1] - fit.extent[0]):
             return on_chroma
-    if fit is not None:
+        if not fit:
+            return NoFit(f"{fit.reason} (in chroma: {on_chroma.reason})" if not on_chroma else fit.reason)
+    if fit:
         t_fit = np.array(fit.extent) + (fit.line.point - line.point) @ line.direction
         stripe_px = float(np.max(reach(t_fit))) - 1.5
         # a side stripe 3 px wide or more is resolved and the grey boundary is already exact
         if stripe_px < 3.0:
-            on_chroma = chroma_boundary(ctx.colour, fit, outward_s * sign, stripe_px + 1.5)
-            if on_chroma is not None:
-                fit = on_chroma
+            on_chroma = chroma_boundary(ctx.colour, fit, outward_s * sign, stripe_px + 1.5, params)
+            fit = on_chroma if on_chroma else replace(fit, note=f"placed on grey levels ({on_chroma.reason})")
     return fit
 
 
@@ -418,8 +417,8 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         fit = _refine_edge(ctx, hypothesis.s0, k, d_lo + inset, d_hi - inset, outward, width_slope, halfwidth,
                            band_fraction=0.05 if prediction is None else 0.15,
                            iterations=None if prediction is None else 1)
-        if fit is None:
-            return None, f"{name} edge: no consistent grey-level step along the candidate line"
+        if not fit:
+            return None, f"{name} edge: {fit.reason}"
         length = fit.extent[1] - fit.extent[0]
         if length < params.min_edge_length_px:
             return None, f"{name} edge: supported over {length:.0f} px only (< {params.min_edge_length_px:g})"
@@ -463,7 +462,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         if not abs(width_now / width_before - 1.0) <= params.max_width_change:
             return None, (f"the edges are {width_now / width_before:.2f} times as far apart as predicted: "
                           "not the runway tracked so far")
-    notes = []
+    notes = [f"{name} edge {fit.note}" for name, fit in fits.items() if fit.note]
     # centre line: midway between the edges in horizon coordinates (harmonic conjugate)
     weights = np.array([1.0 / max(sig_l, 1e-3) ** 2, 1.0 / max(sig_r, 1e-3) ** 2])
     s0 = float((weights @ np.array([s0_l, s0_r])) / weights.sum())
@@ -597,9 +596,9 @@ def _refine_centre(ctx: _Context, s0, k_c, k_l, k_r, d_far, d_near, polarity_hin
     best = None
     for polarity in ((polarity_hint,) if polarity_hint else (1, -1)):
         fit = refine_line(ctx.image, line, (t_lo, t_hi), "stripe", polarity=polarity, halfwidth_px=halfwidth,
-                          n_samples=params.refine_samples, iterations=max(1, params.refine_iterations - 1),
-                          min_contrast=params.min_contrast, stripe_width_px=stripe_width)
-        if fit is None or fit.residual_px > params.max_line_residual_px:
+                          stripe_width_px=stripe_width, params=params,
+                          iterations=max(1, params.refine_iterations - 1))
+        if not fit or fit.residual_px > params.max_line_residual_px:
             continue
         if (fit.extent[1] - fit.extent[0]) < params.min_edge_length_px or fit.support < 0.25:
             continue

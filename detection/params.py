@@ -1,27 +1,89 @@
 """DetectorParams: the one frozen parameter set of the detection stage (JSON/TOML round trip).
 
-Every number the detector uses lives here, with its unit in its name. Lengths in pixels are
-for a frame ``reference_side_px`` wide (2048 by default, the SPEC camera); the detector
-rescales them to the frame it is given (:meth:`DetectorParams.scaled_to`), so one parameter
-file serves every image size. Lengths marked "working-image pixels" are in the downsampled
-image the Hough transform sees and do not scale.
+Every threshold and tuning number the detector uses lives here, named with its unit and
+documented; the detector's modules hold only mathematical constants (a median absolute
+deviation's 1.4826, Tukey's 4.685) and sampling guards.
+
+Pixel lengths are given for the reference camera of SPEC.md (a frame 2048 pixels on its longer
+side, focal length 2472 px) and rescaled to the frame the detector is given
+(:meth:`DetectorParams.scaled_to`), in one of two ways, so that one parameter file serves every
+image size and lens:
+
+- **with the frame size** (:data:`SCALES_WITH_SIZE`): lengths that are about image resolution
+  and evidence: working resolutions, search bands around a candidate found at the working
+  resolution, shortest edge, widths below which a strip is not resolved;
+- **with the focal length** (:data:`SCALES_WITH_FOCAL`): lengths that are angles seen through
+  the lens: motion between frames, attitude uncertainty (the horizon's position), tolerances on
+  where lines meet on the horizon.
+
+For the SPEC camera at another size (a square frame, 45 deg field of view) both factors are
+equal. Lengths in :data:`NOT_SCALED_PX` are sub-pixel sampling steps and floors, or lengths in
+the downsampled working image the Hough transform sees: they do not change with the frame.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import ClassVar
 
 import numpy as np
 
 from visland.params import ParamsFile
 
-__all__ = ["DetectorParams"]
+__all__ = ["DetectorParams", "SCALES_WITH_SIZE", "SCALES_WITH_FOCAL", "NOT_SCALED_PX", "REFERENCE_FOCAL_PX"]
+
+#: Focal length (px) of the reference camera the focal-scaled lengths are given for (SPEC).
+REFERENCE_FOCAL_PX = 2472.0
+
+#: Fields scaled with the frame's longer side, and the floor each is kept above.
+SCALES_WITH_SIZE = {
+    "acquisition_max_side_px": None,        # special: at least min(512, side), integer
+    "tracking_max_side_px": None,           # special: at least min(256, side), integer
+    "min_edge_length_px": 4.0,
+    "search_halfwidth_px": 2.5,
+    "check_first_band_px": 4.0,
+    "check_second_band_px": 3.0,
+    "vp_line_weight_max_px": 20.0,
+    "tracking_min_depth_span_px": 4.0,
+    "acquisition_min_depth_px": 1.0,
+    "acquisition_max_depth_px": 256.0,
+    "pencil_band_min_px": 3.0,
+    "pair_min_width_px": 1.5,
+    "pair_length_scale_px": 4.0,
+    "strip_end_clearance_px": 1.0,
+    "refine_run_gap_px": 3.0,
+    "threshold_width_tolerance_px": 0.5,
+}
+
+#: Fields scaled with the focal length, and the floor each is kept above.
+SCALES_WITH_FOCAL = {
+    "roi_margin_px": 0.0,
+    "vp_tolerance_px": 0.5,
+    "horizon_sigma_px": 0.05,
+    "tracking_sigma_px": 1.0,
+    "horizon_margin_px": 0.0,
+    "max_vp_jump_px": 0.0,
+    "max_vp_jump_rate_pxps": 0.0,
+    "max_threshold_jump_px": 0.0,
+}
+
+#: Pixel lengths that deliberately do not scale (sub-pixel sampling and noise floors, working-image
+#: pixels, and the reference itself).
+NOT_SCALED_PX = (
+    "blur_sigma_px", "hough_min_length_px", "hough_max_gap_px", "segment_merge_working_px", "segment_merge_px",
+    "crossing_min_sigma_px", "pencil_fit_min_sigma_px", "duplicate_gap_px", "pencil_step_halfspan_px",
+    "pencil_join_tolerance_px", "refine_min_band_px", "max_line_residual_px", "reference_side_px",
+    "reference_focal_px",
+)
 
 
 @dataclass(frozen=True)
 class DetectorParams(ParamsFile):
     """Parameters of :func:`visland.detection.detect_runway`.
+
+    Pixel lengths are for the reference camera (``reference_side_px``, ``reference_focal_px``)
+    and rescaled to the frame (module docstring). Fractions "of the width" are of the runway's
+    local width in the image, between its two edges.
 
     Parameters
     ----------
@@ -38,6 +100,8 @@ class DetectorParams(ParamsFile):
         image's ground part (adapts to the frame's contrast; 0 < low < high < 1).
     canny_min_high : float
         Floor of the high Canny threshold (Sobel magnitude units), so a flat frame gives no edges.
+    canny_min_low_ratio : float
+        The low Canny threshold is at least this fraction of the high one.
     hough_votes : int
         Accumulator threshold of the probabilistic Hough transform (edge pixels on a segment).
     hough_min_length_px : float
@@ -48,6 +112,35 @@ class DetectorParams(ParamsFile):
         Angular resolution of the Hough transform.
     max_candidates : int
         At most this many segments (the longest) enter the trapezoid model.
+    candidate_min_length_fraction : float
+        A Hough segment, or a checked candidate line, shorter than this fraction of
+        ``min_edge_length_px`` is dropped.
+    segment_merge_working_px, segment_merge_px : float
+        Two Hough segments are one line when they lie within ``segment_merge_working_px``
+        working-image pixels plus ``segment_merge_px`` full-resolution pixels of each other.
+    check_samples : int
+        Profiles sampled across a candidate line when it is checked on the full frame.
+    check_first_band_px, check_second_band_px : float
+        Half width of the band searched across a candidate line in the first check (around the
+        Hough segment) and the second (around the re-fitted line).
+    check_first_extend : float
+        The first check samples the Hough span extended by this fraction of its length each side.
+    check_extend_far, check_extend_near : float
+        The second check samples the re-fitted line over its span extended by these multiples of
+        its length towards the horizon and towards the image bottom.
+    check_min_points : int
+        Fewest profiles holding a step of one sign for a candidate line to be re-fitted.
+    check_min_run_points : int
+        Fewest consistent points in a candidate line's supported run.
+    check_max_gap_fraction : float
+        A candidate line's supported run has no gap longer than this fraction of the span sampled.
+    crossing_min_sigma_px : float
+        Floor of a candidate line's horizon-crossing uncertainty.
+    pencil_fit_min_sigma_px : float
+        Floor of the robust scale when a candidate line ``s = s0 + k d`` is re-fitted.
+    duplicate_gap_px : float
+        Candidate lines of one polarity within this distance of each other over their common
+        span are one edge.
     max_edge_slope : float
         Largest ``|ds/dd|`` of a runway line in horizon coordinates (s along the horizon, d
         below it): 4 is 76 deg from the horizon's normal. Flatter lines (the horizon, roads
@@ -55,9 +148,102 @@ class DetectorParams(ParamsFile):
     vp_tolerance_px : float
         Two edges belong to one runway when their crossings of the horizon agree to this many
         pixels plus their extrapolation uncertainty.
+    vp_min_line_support : float
+        Candidate lines with less support (fraction of profiles) do not propose vanishing points.
+    vp_line_weight_max_px : float
+        A candidate line's vote for a vanishing point grows with its length up to this length.
+    vp_sigma_factor : float
+        Lines agree on a vanishing point within ``vp_tolerance_px`` plus this many of their
+        crossing sigmas.
+    vp_points_acquisition, vp_points_tracking : int
+        Vanishing-point candidates examined in acquisition and in tracking (the prediction first).
+    max_hypotheses : int
+        Runway hypotheses kept from the trapezoid model (the best few are measured).
+    tracking_slope_margin : float
+        In tracking, slopes ``k`` searched beyond the predicted edges' (horizon coordinates).
+    tracking_depth_margin_far, tracking_depth_margin_near : float
+        In tracking, depths searched beyond the predicted runway, as fractions of its depth span,
+        towards the horizon and towards the image bottom.
+    tracking_min_depth_span_px : float
+        Smallest depth span used for those margins.
+    acquisition_min_depth_px, acquisition_max_depth_px : float
+        Depths below the horizon rectified in acquisition.
+    acquisition_rect_rows, acquisition_rect_columns : int
+        Size of the acquisition's rectified image (rows spaced in proportion to depth): caps on
+        its cost, not lengths (a smaller frame is rectified as finely or more).
+    pencil_band_ratio : float
+        Depth bands of the rectified image grow geometrically by this ratio.
+    pencil_band_min_px : float
+        Shallowest depth band.
+    pencil_step_halfspan_px : float
+        Steps along a band's column profile are differences over this many pixels each side.
+    pencil_join_tolerance_px : float
+        Steps of neighbouring bands within this distance (pixels at the band's depth) are one edge.
+    pencil_min_step_fraction : float
+        Smallest step in a band profile, as a fraction of ``min_contrast``.
+    pencil_column_coverage : float
+        A band's column is used when at least this fraction of its rows lies in the frame.
+    pencil_max_edges : int
+        Most edges kept per rectified image.
     min_length_to_width : float
         Smallest length-to-width ratio of a runway (a long strip; ICAO runways are 20 to 80
         times longer than wide): pairs of lines bounding a shorter strip are not runways.
+    pair_min_width_px : float
+        Narrowest runway, pixels at the near end of the two edges' common span.
+    pair_length_scale_px : float
+        Length (px) at which a pair's length term reaches 63 % (``1 - exp(-length / scale)``).
+    pair_max_examined : int
+        Pairs, best by the quick score, examined in full per rectified image.
+    pair_min_interior : float
+        A pair whose inside differs from its outside by less than this fraction of its edges'
+        step (the sign the edges say) is not a strip.
+    pair_interior_margin : float
+        The inside of a pair is read from this fraction of the width in from each edge.
+    pair_quick_centre_gap, pair_centre_gap : float
+        ... to this fraction of the width short of the midline (quick score and full evidence).
+    pair_outside_band : tuple of 2 float
+        The ground beside an edge is read between these fractions of the width outside it.
+    score_symmetry_floor, score_outside_floor, score_centre_floor : float
+        Floors added to the symmetry, same-ground-both-sides and centre-line terms of a pair's
+        score (a pair weak in one is not zeroed by it).
+    score_uniform_floor, score_spread_scale : float
+        The term rewarding an inside that is mostly one surface falls from 1 to this floor as the
+        inside's interquartile spread grows to ``score_spread_scale`` times the edges' step.
+    score_ends_base, score_ends_per_end : float
+        The score's term for the strip's ends in view: base plus this much per end (a runway is
+        a finite strip; a road runs on).
+    score_dark_centre_weight : float
+        A dark centre stripe counts this fraction of a bright one (painted lines are white).
+    centre_stripe_halfwidth, centre_stripe_sides : float, tuple of 2 float
+        The centre stripe is read within this fraction of the width of the midline, against the
+        mean between these fractions on either side.
+    centre_stripe_min_step, centre_stripe_fraction : float
+        A row holds the centre stripe when it stands out by at least the larger of this many grey
+        levels and this fraction of the inside-outside difference.
+    strip_inside_band : tuple of 2 float
+        Fractions of the width read as the strip's surface when following it along its length.
+    strip_side_band : tuple of 2 float
+        Fractions of the width outside each edge read as the ground beside it.
+    strip_core_margin : float
+        The strip's reference rows skip this fraction of the edges' common span at each end.
+    strip_level_fraction, ground_level_fraction : float
+        A row belongs to the strip when it differs from the ground by at least the first fraction
+        of the reference difference, to the ground when by at most the second.
+    strip_end_rows : int
+        Rows beyond a strip's end that must look like the ground for the end to count.
+    strip_end_clearance_px : float
+        An end must lie this far from the horizon and the image bottom to count.
+    parallel_score_ratio, parallel_min_width_ratio : float
+        Of strips side by side, a wider one (by this ratio) scoring at least this fraction of the
+        other's score is put first (a runway is wider than its parallel taxiway).
+    strip_min_interior, strip_max_outside_gap, strip_max_spread : float
+        A convincing strip: inside-outside difference at least ``strip_min_interior`` of its
+        edges' step, the two outsides within ``strip_max_outside_gap`` of that difference, the
+        inside's spread within ``strip_max_spread`` times it.
+    enclosing_centre_tolerance, enclosing_max_width_ratio, enclosing_score_ratio : float
+        A hypothesis enclosing the best one (same midline within the tolerance, fraction of the
+        width; at most this much wider; at least this fraction of its score) is the runway's
+        outer boundary and goes first (the best was the inner edges of the side stripes).
     min_edge_length_px : float
         Shortest runway edge accepted (full-resolution pixels along the line).
     search_halfwidth_px : float
@@ -66,6 +252,23 @@ class DetectorParams(ParamsFile):
         Most profiles sampled along one line during refinement.
     refine_iterations : int
         Re-sampling passes of the refinement (each narrows the band).
+    refine_min_band_px : float
+        The refinement's band never narrows below this half width.
+    refine_net_fraction : float
+        A region boundary's profile is used when its grey level changes the boundary's way by at
+        least this fraction of the median change.
+    refine_weak_fraction : float
+        Profiles whose step is weaker than this fraction of the median step are not used
+        (texture beside the line).
+    refine_run_gap_px, refine_run_gap_fraction : float
+        A refined line's visible stretch is the largest run of inliers without a gap longer than
+        the larger of this length and this fraction of the span.
+    chroma_min_change : float
+        A chroma boundary is used where the chroma rises by at least this many levels across it.
+    chroma_min_span : float
+        ... and its points cover at least this fraction of the grey line's span.
+    chroma_samples : int
+        Chroma profiles sampled along a boundary.
     min_edge_support : float
         Smallest fraction of a line's profiles that must hold an inlying edge.
     max_line_residual_px : float
@@ -121,34 +324,120 @@ class DetectorParams(ParamsFile):
     reference_rate_hz : float
         Frame rate the per-frame limits above are given for.
     reference_side_px : int
-        Image width the pixel lengths above are given for.
+        Longer side of the frame the size-scaled lengths above are given for.
+    reference_focal_px : float
+        Focal length (px) of the camera the focal-scaled lengths above are given for.
     """
 
     params_kind: ClassVar[str] = "detector"
     toml_table: ClassVar[str | None] = "detector"
 
-
+    # --- working resolution, Canny and Hough (candidates.hough_segments)
     acquisition_max_side_px: int = 1024
     tracking_max_side_px: int = 640
     blur_sigma_px: float = 1.0
     canny_low_quantile: float = 0.70
     canny_high_quantile: float = 0.85
     canny_min_high: float = 10.0
+    canny_min_low_ratio: float = 0.4
     hough_votes: int = 18
     hough_min_length_px: float = 14.0
     hough_max_gap_px: float = 3.0
     hough_angle_step_deg: float = 1.0
     max_candidates: int = 150
+    # --- candidate lines checked on the frame (candidates.candidate_lines, check_lines)
+    candidate_min_length_fraction: float = 0.5
+    segment_merge_working_px: float = 1.5
+    segment_merge_px: float = 0.5
+    check_samples: int = 48
+    check_first_band_px: float = 6.0
+    check_second_band_px: float = 3.0
+    check_first_extend: float = 0.1
+    check_extend_far: float = 1.0
+    check_extend_near: float = 1.5
+    check_min_points: int = 6
+    check_min_run_points: int = 4
+    check_max_gap_fraction: float = 0.2
+    crossing_min_sigma_px: float = 0.3
+    pencil_fit_min_sigma_px: float = 0.3
+    duplicate_gap_px: float = 1.0
+    # --- vanishing points and the trapezoid model (trapezoid, pencil)
     max_edge_slope: float = 4.0
     vp_tolerance_px: float = 8.0
+    vp_min_line_support: float = 0.3
+    vp_line_weight_max_px: float = 200.0
+    vp_sigma_factor: float = 2.0
+    vp_points_acquisition: int = 4
+    vp_points_tracking: int = 2
+    max_hypotheses: int = 6
+    tracking_slope_margin: float = 0.3
+    tracking_depth_margin_far: float = 0.3
+    tracking_depth_margin_near: float = 0.5
+    tracking_min_depth_span_px: float = 8.0
+    acquisition_min_depth_px: float = 2.0
+    acquisition_max_depth_px: float = 4096.0
+    acquisition_rect_rows: int = 160
+    acquisition_rect_columns: int = 3072
+    pencil_band_ratio: float = 1.35
+    pencil_band_min_px: float = 6.0
+    pencil_step_halfspan_px: float = 0.75
+    pencil_join_tolerance_px: float = 1.0
+    pencil_min_step_fraction: float = 0.5
+    pencil_column_coverage: float = 0.5
+    pencil_max_edges: int = 120
     min_length_to_width: float = 8.0
+    pair_min_width_px: float = 3.0
+    pair_length_scale_px: float = 30.0
+    pair_max_examined: int = 24
+    pair_min_interior: float = 0.1
+    pair_interior_margin: float = 0.12
+    pair_quick_centre_gap: float = 0.05
+    pair_centre_gap: float = 0.08
+    pair_outside_band: tuple = (0.12, 0.4)
+    score_symmetry_floor: float = 0.5
+    score_outside_floor: float = 0.3
+    score_centre_floor: float = 0.5
+    score_uniform_floor: float = 0.1
+    score_spread_scale: float = 2.0
+    score_ends_base: float = 0.4
+    score_ends_per_end: float = 0.3
+    score_dark_centre_weight: float = 0.5
+    centre_stripe_halfwidth: float = 0.015
+    centre_stripe_sides: tuple = (0.04, 0.08)
+    centre_stripe_min_step: float = 2.0
+    centre_stripe_fraction: float = 0.2
+    strip_inside_band: tuple = (0.1, 0.9)
+    strip_side_band: tuple = (0.12, 0.38)
+    strip_core_margin: float = 0.2
+    strip_level_fraction: float = 0.5
+    ground_level_fraction: float = 0.25
+    strip_end_rows: int = 3
+    strip_end_clearance_px: float = 3.0
+    parallel_score_ratio: float = 0.3
+    parallel_min_width_ratio: float = 1.3
+    strip_min_interior: float = 0.5
+    strip_max_outside_gap: float = 0.5
+    strip_max_spread: float = 1.5
+    enclosing_centre_tolerance: float = 0.15
+    enclosing_max_width_ratio: float = 1.4
+    enclosing_score_ratio: float = 0.25
+    # --- sub-pixel refinement (refine)
     min_edge_length_px: float = 24.0
     search_halfwidth_px: float = 6.0
     refine_samples: int = 96
     refine_iterations: int = 3
+    refine_min_band_px: float = 2.5
+    refine_net_fraction: float = 0.3
+    refine_weak_fraction: float = 0.35
+    refine_run_gap_px: float = 8.0
+    refine_run_gap_fraction: float = 0.15
+    chroma_min_change: float = 8.0
+    chroma_min_span: float = 0.6
+    chroma_samples: int = 64
     min_edge_support: float = 0.45
     max_line_residual_px: float = 1.5
     min_contrast: float = 6.0
+    # --- tracking, the measurement and its confidence (detector)
     roi_margin_px: float = 40.0
     roi_margin_fraction: float = 0.15
     threshold_search_fraction: float = 0.35
@@ -157,6 +446,7 @@ class DetectorParams(ParamsFile):
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     horizon_margin_px: float = 0.0
+    # --- over a sequence (sequence)
     hold_s: float = 1.0
     max_edge_turn_rad: float = 0.05
     max_edge_turn_rate_rps: float = 0.3
@@ -168,90 +458,136 @@ class DetectorParams(ParamsFile):
     threshold_width_tolerance_px: float = 2.0
     threshold_width_tolerance_fraction: float = 0.04
     reference_rate_hz: float = 25.0
+    # --- the reference camera of the pixel lengths
     reference_side_px: int = 2048
+    reference_focal_px: float = REFERENCE_FOCAL_PX
+
+    #: Valid range of every field: ``(low, high)``; ``int`` marks integers, ``open`` an excluded
+    #: low end; tuples are checked element by element.
+    _RANGES: ClassVar[dict] = {
+        "acquisition_max_side_px": (128, 8192, "int"), "tracking_max_side_px": (64, 8192, "int"),
+        "blur_sigma_px": (0.0, 5.0), "canny_low_quantile": (0.0, 1.0, "open"),
+        "canny_high_quantile": (0.0, 1.0, "open"), "canny_min_high": (0.0, 2000.0),
+        "canny_min_low_ratio": (0.0, 1.0), "hough_votes": (2, 10000, "int"),
+        "hough_min_length_px": (2.0, 10000.0), "hough_max_gap_px": (0.0, 100.0),
+        "hough_angle_step_deg": (0.01, 5.0), "max_candidates": (4, 10000, "int"),
+        "candidate_min_length_fraction": (0.0, 1.0), "segment_merge_working_px": (0.0, 50.0),
+        "segment_merge_px": (0.0, 50.0), "check_samples": (8, 10000, "int"),
+        "check_first_band_px": (0.5, 500.0), "check_second_band_px": (0.5, 500.0),
+        "check_first_extend": (0.0, 10.0), "check_extend_far": (0.0, 10.0), "check_extend_near": (0.0, 10.0),
+        "check_min_points": (3, 1000, "int"), "check_min_run_points": (2, 1000, "int"),
+        "check_max_gap_fraction": (0.0, 1.0, "open"), "crossing_min_sigma_px": (0.0, 100.0),
+        "pencil_fit_min_sigma_px": (0.01, 100.0), "duplicate_gap_px": (0.0, 100.0),
+        "max_edge_slope": (0.1, 100.0), "vp_tolerance_px": (0.1, 1000.0), "vp_min_line_support": (0.0, 1.0),
+        "vp_line_weight_max_px": (1.0, 100000.0), "vp_sigma_factor": (0.0, 100.0),
+        "vp_points_acquisition": (1, 100, "int"), "vp_points_tracking": (1, 100, "int"),
+        "max_hypotheses": (1, 1000, "int"), "tracking_slope_margin": (0.0, 100.0),
+        "tracking_depth_margin_far": (0.0, 10.0), "tracking_depth_margin_near": (0.0, 10.0),
+        "tracking_min_depth_span_px": (1.0, 10000.0), "acquisition_min_depth_px": (0.5, 10000.0),
+        "acquisition_max_depth_px": (16.0, 100000.0), "acquisition_rect_rows": (16, 10000, "int"),
+        "acquisition_rect_columns": (64, 100000, "int"), "pencil_band_ratio": (1.01, 10.0),
+        "pencil_band_min_px": (1.0, 1000.0), "pencil_step_halfspan_px": (0.1, 100.0),
+        "pencil_join_tolerance_px": (0.1, 100.0), "pencil_min_step_fraction": (0.0, 10.0),
+        "pencil_column_coverage": (0.0, 1.0, "open"), "pencil_max_edges": (2, 10000, "int"),
+        "min_length_to_width": (0.0, 1000.0), "pair_min_width_px": (0.0, 1000.0),
+        "pair_length_scale_px": (0.1, 10000.0), "pair_max_examined": (1, 10000, "int"),
+        "pair_min_interior": (0.0, 1.0), "pair_interior_margin": (0.0, 0.5), "pair_quick_centre_gap": (0.0, 0.5),
+        "pair_centre_gap": (0.0, 0.5), "pair_outside_band": (0.0, 5.0), "score_symmetry_floor": (0.0, 100.0),
+        "score_outside_floor": (0.0, 100.0), "score_centre_floor": (0.0, 100.0), "score_uniform_floor": (0.0, 1.0),
+        "score_spread_scale": (0.01, 100.0),
+        "score_ends_base": (0.0, 100.0), "score_ends_per_end": (0.0, 100.0), "score_dark_centre_weight": (0.0, 1.0),
+        "centre_stripe_halfwidth": (0.0, 0.5, "open"), "centre_stripe_sides": (0.0, 0.5),
+        "centre_stripe_min_step": (0.0, 255.0), "centre_stripe_fraction": (0.0, 10.0),
+        "strip_inside_band": (0.0, 1.0), "strip_side_band": (0.0, 5.0), "strip_core_margin": (0.0, 0.49),
+        "strip_level_fraction": (0.0, 10.0), "ground_level_fraction": (0.0, 10.0),
+        "strip_end_rows": (1, 1000, "int"), "strip_end_clearance_px": (0.0, 1000.0),
+        "parallel_score_ratio": (0.0, 10.0), "parallel_min_width_ratio": (1.0, 100.0),
+        "strip_min_interior": (0.0, 10.0), "strip_max_outside_gap": (0.0, 100.0), "strip_max_spread": (0.0, 100.0),
+        "enclosing_centre_tolerance": (0.0, 10.0), "enclosing_max_width_ratio": (1.0, 100.0),
+        "enclosing_score_ratio": (0.0, 10.0),
+        "min_edge_length_px": (4.0, 10000.0), "search_halfwidth_px": (1.5, 200.0),
+        "refine_samples": (8, 100000, "int"), "refine_iterations": (1, 20, "int"),
+        "refine_min_band_px": (0.5, 100.0), "refine_net_fraction": (0.0, 10.0), "refine_weak_fraction": (0.0, 1.0),
+        "refine_run_gap_px": (0.0, 10000.0), "refine_run_gap_fraction": (0.0, 1.0),
+        "chroma_min_change": (0.0, 255.0), "chroma_min_span": (0.0, 1.0), "chroma_samples": (3, 100000, "int"),
+        "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
+        "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
+        "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "min_confidence": (0.0, 1.0),
+        "horizon_margin_px": (0.0, 100000.0), "hold_s": (0.0, 60.0), "max_edge_turn_rad": (0.0, 3.2),
+        "max_edge_turn_rate_rps": (0.0, 100.0), "max_vp_jump_px": (0.0, 100000.0),
+        "max_vp_jump_rate_pxps": (0.0, 1e6), "max_threshold_jump_px": (0.0, 100000.0),
+        "max_threshold_jump_fraction": (0.0, 100.0), "threshold_track_s": (0.1, 60.0),
+        "threshold_width_tolerance_px": (0.0, 1000.0), "threshold_width_tolerance_fraction": (0.0, 10.0),
+        "reference_rate_hz": (0.1, 10000.0),
+        "reference_side_px": (16, 100000, "int"), "reference_focal_px": (1.0, 1e6),
+    }
 
     def __post_init__(self):
-        def number(name, low, high, integer=False, open_low=False):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ValueError(f"DetectorParams.{name} must be a number, got {value!r}")
-            if integer and int(value) != value:
-                raise ValueError(f"DetectorParams.{name} must be an integer, got {value!r}")
-            if not math.isfinite(value) or value < low or value > high or (open_low and value == low):
-                bracket = "(" if open_low else "["
-                raise ValueError(f"DetectorParams.{name} must lie in {bracket}{low:g}, {high:g}], got {value!r}")
-            if integer:
-                object.__setattr__(self, name, int(value))
-
-        number("acquisition_max_side_px", 128, 8192, integer=True)
-        number("tracking_max_side_px", 64, 8192, integer=True)
-        number("blur_sigma_px", 0.0, 5.0)
-        number("canny_low_quantile", 0.0, 1.0, open_low=True)
-        number("canny_high_quantile", 0.0, 1.0, open_low=True)
+        for f in fields(self):
+            if f.name not in self._RANGES:
+                raise RuntimeError(f"DetectorParams.{f.name} has no valid range")    # keeps the table complete
+            low, high, *flags = self._RANGES[f.name]
+            value = getattr(self, f.name)
+            if isinstance(f.default, tuple):
+                if not isinstance(value, (tuple, list)) or len(value) != len(f.default):
+                    raise ValueError(f"DetectorParams.{f.name} must be {len(f.default)} numbers, got {value!r}")
+                items = tuple(self._number(f.name, v, low, high, flags) for v in value)
+                if list(items) != sorted(items):
+                    raise ValueError(f"DetectorParams.{f.name} must be increasing, got {value!r}")
+                object.__setattr__(self, f.name, items)
+            else:
+                object.__setattr__(self, f.name, self._number(f.name, value, low, high, flags))
         if self.canny_low_quantile >= self.canny_high_quantile:
             raise ValueError("DetectorParams.canny_low_quantile must be smaller than canny_high_quantile")
-        number("canny_min_high", 0.0, 2000.0)
-        number("hough_votes", 2, 10000, integer=True)
-        number("hough_min_length_px", 2.0, 10000.0)
-        number("hough_max_gap_px", 0.0, 100.0)
-        number("hough_angle_step_deg", 0.01, 5.0)
-        number("max_candidates", 4, 10000, integer=True)
-        number("max_edge_slope", 0.1, 100.0)
-        number("vp_tolerance_px", 0.1, 1000.0)
-        number("min_length_to_width", 0.0, 1000.0)
-        number("min_edge_length_px", 4.0, 10000.0)
-        number("search_halfwidth_px", 1.5, 200.0)
-        number("refine_samples", 8, 100000, integer=True)
-        number("refine_iterations", 1, 20, integer=True)
-        number("min_edge_support", 0.0, 1.0, open_low=True)
-        number("max_line_residual_px", 0.01, 100.0)
-        number("min_contrast", 0.0, 255.0)
-        number("roi_margin_px", 0.0, 4096.0)
-        number("roi_margin_fraction", 0.0, 10.0)
-        number("threshold_search_fraction", 0.01, 1.0)
-        number("horizon_sigma_px", 0.01, 10000.0)
-        number("tracking_sigma_px", 0.1, 10000.0)
-        number("max_width_change", 0.01, 10.0)
-        number("hold_s", 0.0, 60.0)
-        number("max_edge_turn_rad", 0.0, 3.2)
-        number("max_edge_turn_rate_rps", 0.0, 100.0)
-        number("max_vp_jump_px", 0.0, 100000.0)
-        number("max_vp_jump_rate_pxps", 0.0, 1e6)
-        number("max_threshold_jump_px", 0.0, 100000.0)
-        number("max_threshold_jump_fraction", 0.0, 100.0)
-        number("threshold_track_s", 0.1, 60.0)
-        number("threshold_width_tolerance_px", 0.0, 1000.0)
-        number("threshold_width_tolerance_fraction", 0.0, 10.0)
-        number("reference_rate_hz", 0.1, 10000.0)
-        number("min_confidence", 0.0, 1.0)
-        number("horizon_margin_px", 0.0, 100000.0)
-        number("reference_side_px", 16, 100000, integer=True)
+
+    @staticmethod
+    def _number(name, value, low, high, flags):
+        integer, open_low = "int" in flags, "open" in flags
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise ValueError(f"DetectorParams.{name} must be a number, got {value!r}")
+        if integer and int(value) != value:
+            raise ValueError(f"DetectorParams.{name} must be an integer, got {value!r}")
+        if not math.isfinite(value) or value < low or value > high or (open_low and value == low):
+            bracket = "(" if open_low else "["
+            raise ValueError(f"DetectorParams.{name} must lie in {bracket}{low:g}, {high:g}], got {value!r}")
+        return int(value) if integer else float(value)
 
     # ----------------------------------------------------------------- variants
-    def scaled_to(self, image_side_px: int) -> "DetectorParams":
-        """The same detector for frames ``image_side_px`` wide: lengths in pixels scale, counts,
-        ratios and grey levels do not. Idempotent (the result's reference is that width)."""
-        if isinstance(image_side_px, bool) or not isinstance(image_side_px, (int, np.integer)) or image_side_px < 16:
-            raise ValueError(f"image_side_px must be an integer of at least 16, got {image_side_px!r}")
-        image_side_px = int(image_side_px)
-        if image_side_px == self.reference_side_px:
-            return self
-        k = image_side_px / float(self.reference_side_px)
-        return replace(
-            self,
-            reference_side_px=image_side_px,
-            acquisition_max_side_px=int(max(min(512, image_side_px), round(self.acquisition_max_side_px * k))),
-            tracking_max_side_px=int(max(min(256, image_side_px), round(self.tracking_max_side_px * k))),
-            min_edge_length_px=max(4.0, self.min_edge_length_px * k),
-            search_halfwidth_px=max(2.5, self.search_halfwidth_px * k),
-            roi_margin_px=self.roi_margin_px * k,
-            vp_tolerance_px=max(0.5, self.vp_tolerance_px * k),
-            horizon_sigma_px=max(0.05, self.horizon_sigma_px * k),
-            tracking_sigma_px=max(1.0, self.tracking_sigma_px * k),
-            horizon_margin_px=self.horizon_margin_px * k,
-            max_vp_jump_px=self.max_vp_jump_px * k,
-            max_vp_jump_rate_pxps=self.max_vp_jump_rate_pxps * k,
-            max_threshold_jump_px=self.max_threshold_jump_px * k,
-            threshold_width_tolerance_px=self.threshold_width_tolerance_px * k)
+    def scaled_to(self, frame) -> "DetectorParams":
+        """The same detector for another frame: lengths in pixels scale (module docstring), counts,
+        ratios and grey levels do not.
 
-    # ----------------------------------------------------------------- files
+        Parameters
+        ----------
+        frame : CameraModel or int
+            The camera of the frames (its longer side and focal length ``fx``), or the side of a
+            square frame of the SPEC field of view (45 deg: the focal length scales with it).
+
+        Returns
+        -------
+        DetectorParams
+            With ``reference_side_px`` and ``reference_focal_px`` those of ``frame``; idempotent
+            (``self`` when they already are).
+        """
+        if isinstance(frame, (int, np.integer)) and not isinstance(frame, bool):
+            if frame < 16:
+                raise ValueError(f"frame must be a CameraModel or an image side of at least 16 px, got {frame!r}")
+            side, focal = int(frame), REFERENCE_FOCAL_PX * int(frame) / 2048.0
+        elif hasattr(frame, "width") and hasattr(frame, "height") and hasattr(frame, "fx"):
+            side, focal = int(max(frame.width, frame.height)), float(frame.fx)
+        else:
+            raise ValueError(f"frame must be a CameraModel or an image side in pixels, got {frame!r}")
+        if side == self.reference_side_px and math.isclose(focal, self.reference_focal_px, rel_tol=1e-12):
+            return self
+        k_size = side / float(self.reference_side_px)
+        k_focal = focal / self.reference_focal_px
+        changes = {"reference_side_px": side, "reference_focal_px": focal}
+        for name, floor in SCALES_WITH_SIZE.items():
+            if floor is not None:
+                changes[name] = max(floor, getattr(self, name) * k_size)
+        changes["acquisition_max_side_px"] = int(max(min(512, side), round(self.acquisition_max_side_px * k_size)))
+        changes["tracking_max_side_px"] = int(max(min(256, side), round(self.tracking_max_side_px * k_size)))
+        for name, floor in SCALES_WITH_FOCAL.items():
+            changes[name] = max(floor, getattr(self, name) * k_focal)
+        return replace(self, **changes)

@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 
 from visland.detection.horizon import HorizonFrame
+from visland.detection.params import DetectorParams
 
 __all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_mean", "finite_median"]
 
@@ -158,16 +159,23 @@ def _band_edges(profile: np.ndarray, half: int, min_step: float):
     return peaks, step[peaks]
 
 
-def pencil_edges(rect: PencilImage, min_step: float, band_ratio: float = 1.35,
-                 max_edges: int = 40) -> PencilEdges:
-    """Steps along columns of a rectified image, joined across depth bands."""
+def pencil_edges(rect: PencilImage, params: DetectorParams) -> PencilEdges:
+    """Steps along columns of a rectified image, joined across depth bands.
+
+    Bands grow by ``params.pencil_band_ratio`` (at least ``pencil_band_min_px`` deep); a band's
+    steps are differences over ``pencil_step_halfspan_px`` each side, at least
+    ``pencil_min_step_fraction * min_contrast`` grey levels; steps of neighbouring bands within
+    ``pencil_join_tolerance_px`` are joined; at most ``pencil_max_edges`` edges, strongest first.
+    """
+    band_ratio, min_band = params.pencil_band_ratio, params.pencil_band_min_px
+    min_step = params.pencil_min_step_fraction * params.min_contrast
     d = rect.d
-    # depth bands of geometric widths, at least 6 rows each
+    # depth bands of geometric widths
     edges_of_bands = []
     lo = d[0]
     bands = []
     while lo < d[-1] - 1e-9:
-        hi = min(d[-1], max(lo * band_ratio, lo + 6.0))
+        hi = min(d[-1], max(lo * band_ratio, lo + min_band))
         if d[-1] - hi < 0.5 * (hi - lo):
             hi = d[-1]
         bands.append((lo, hi))
@@ -182,10 +190,10 @@ def pencil_edges(rect: PencilImage, min_step: float, band_ratio: float = 1.35,
         counts = np.isfinite(values[rows]).sum(axis=0)
         total = np.where(np.isfinite(values[rows]), values[rows], 0.0).sum(axis=0)
         with np.errstate(invalid="ignore", divide="ignore"):
-            profile = np.where(counts >= 0.5 * rows.sum(), total / counts, np.nan)
+            profile = np.where(counts >= params.pencil_column_coverage * rows.sum(), total / counts, np.nan)
         profiles[index] = profile
-        # difference over about +-0.75 px at the band's middle depth
-        half = max(1, int(round(0.75 / (rect.k_step * 0.5 * (b_lo + b_hi)))))
+        # difference over about +-pencil_step_halfspan_px at the band's middle depth
+        half = max(1, int(round(params.pencil_step_halfspan_px / (rect.k_step * 0.5 * (b_lo + b_hi)))))
         edges_of_bands.append(_band_edges(profile, half, min_step))
     # join: every band's step proposes an edge; its span is the run of bands holding a step
     # of the same sign within a pixel of the same column
@@ -204,7 +212,7 @@ def pencil_edges(rect: PencilImage, min_step: float, band_ratio: float = 1.35,
             bb, cc = b + direction, c
             while 0 <= bb < len(bands):
                 cols, steps = edges_of_bands[bb]
-                tol = max(1, int(round(1.0 / (rect.k_step * 0.5 * sum(bands[bb])))))
+                tol = max(1, int(round(params.pencil_join_tolerance_px / (rect.k_step * 0.5 * sum(bands[bb])))))
                 near = np.nonzero((np.abs(cols - cc) <= tol) & (np.sign(steps) == sign) & ~taken[bb])[0]
                 if len(near) == 0:
                     break
@@ -221,7 +229,7 @@ def pencil_edges(rect: PencilImage, min_step: float, band_ratio: float = 1.35,
         column = float(np.average([m[1] for m in members], weights=weights))
         out.append((rect.k[0] + column * rect.k_step, sign, float(weights.mean()),
                     bands[min(band_ids)][0], bands[max(band_ids)][1], len(members) / (max(band_ids) - min(band_ids) + 1)))
-        if len(out) >= max_edges:
+        if len(out) >= params.pencil_max_edges:
             break
     band_array = np.array(bands, dtype=float).reshape(-1, 2)
     if not out:

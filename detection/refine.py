@@ -20,10 +20,21 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-__all__ = ["PixelLine", "LineFit", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
+from visland.detection.params import DetectorParams
+
+__all__ = ["PixelLine", "LineFit", "NoFit", "SLOPE_PER_STEP", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
            "stripe_offsets", "fit_line", "refine_line", "chroma_boundary", "chroma_of"]
 
 _DERIVATIVE = np.array([-1.0, -2.0, 0.0, 2.0, 1.0]) / 8.0
+#: Peak slope of the 5-tap derivative across a step blurred by about a pixel, per unit of step
+#: height (a blurred step of height h peaks near h / (sqrt(2 pi) sigma)): slope / 0.3 estimates h.
+SLOPE_PER_STEP = 0.3
+#: The same for the central difference across an area-sampled step (a one-pixel ramp): h / 2.
+RAMP_SLOPE_PER_STEP = 0.5
+#: Sampling step (px) of the profiles across a region's boundary (sub-pixel flank positions).
+BOUNDARY_STEP_PX = 0.5
+#: Room (px) added beyond the search band so the derivative kernels see whole steps.
+KERNEL_ROOM_PX = 3.0
 
 
 @dataclass(frozen=True)
@@ -79,6 +90,9 @@ class LineFit:
     n_inliers : int
     points : ndarray, shape (n, 2)
         Inlying edge points (pixels).
+    note : str
+        How the line was placed when it matters (e.g. on grey levels because the chroma did not
+        tell, and why); empty otherwise.
     """
 
     line: PixelLine
@@ -91,11 +105,23 @@ class LineFit:
     sigma_angle_rad: float
     n_inliers: int
     points: np.ndarray
+    note: str = ""
 
     def sigma_at(self, uv) -> float:
         """One-sigma normal uncertainty (pixels) of the line at a point, extrapolated."""
         t = float((np.asarray(uv, float) - self.line.point) @ self.line.direction)
         return math.hypot(self.sigma_offset_px, t * self.sigma_angle_rad)
+
+
+@dataclass(frozen=True)
+class NoFit:
+    """Why a line could not be refined: false in a boolean test, so ``if not fit`` reads as
+    "no line", and the reason travels to the measurement row."""
+
+    reason: str
+
+    def __bool__(self) -> bool:
+        return False
 
 
 def chroma_of(rgb: np.ndarray) -> np.ndarray:
@@ -462,9 +488,9 @@ def fit_line(points: np.ndarray, weights: np.ndarray, min_sigma_px: float = 0.05
 
 
 def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", polarity: int = 0,
-                halfwidth_px: float = 6.0, n_samples: int = 200, iterations: int = 3,
-                min_contrast: float = 6.0, outward: int = 0, outward_reach_px=0.0,
-                stripe_width_px=None, net_polarity: int = 0) -> LineFit | None:
+                halfwidth_px: float = 6.0, outward: int = 0, outward_reach_px=0.0,
+                stripe_width_px=None, net_polarity: int = 0, params: DetectorParams | None = None,
+                iterations: int | None = None) -> LineFit | NoFit:
     """Refine ``line`` on ``image`` between positions ``t_range`` along it.
 
     Parameters
@@ -479,11 +505,7 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         0 to take the stronger of either (edges only).
     halfwidth_px : float or callable
         First search band (or a function of the position t along the line giving it); each
-        later pass halves it (not below 2.5 px).
-    n_samples : int
-        Profiles along the line (at most one per pixel).
-    min_contrast : float
-        Edges weaker than this (grey-level step) are not used.
+        later pass halves it (not below ``params.refine_min_band_px``).
     outward : 0, or +1/-1: the side of the line (along +/- ``line.normal``) where the runway's
         outside lies. The edge is then the region's boundary (:func:`boundary_offsets`): past
         a painted border stripe up to ``outward_reach_px`` wide (scalar or callable of the
@@ -493,17 +515,27 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
     net_polarity : int
         With ``outward``: the sign of the grey-level change from inside to outside the region
         (0: the majority of the profiles says). Profiles whose located boundary does not change
-        the grey level that way are not used.
+        the grey level that way (``params.refine_net_fraction``) are not used.
+    params : DetectorParams, optional
+        ``refine_samples`` profiles along the line (at most one per pixel), ``min_contrast``
+        (weaker edges, in grey levels, are not used), ``refine_weak_fraction``,
+        ``refine_run_gap_px`` / ``refine_run_gap_fraction`` (the visible stretch) and
+        ``refine_min_band_px``.
+    iterations : int, optional
+        Passes (default ``params.refine_iterations``).
 
     Returns
     -------
-    LineFit or None when fewer than 3 profiles hold an edge.
+    LineFit, or NoFit with the reason (fewer than 3 profiles hold an edge, no continuous run).
     """
+    params = params or DetectorParams()
+    iterations = params.refine_iterations if iterations is None else int(iterations)
+    min_contrast = params.min_contrast
     t0, t1 = float(min(t_range)), float(max(t_range))
     length = t1 - t0
     if not (math.isfinite(length) and length >= 2.0):
-        return None
-    n = int(max(3, min(n_samples, math.floor(length) + 1)))
+        return NoFit(f"a span of {length:.1f} px is too short to refine")
+    n = int(max(3, min(params.refine_samples, math.floor(length) + 1)))
     t = np.linspace(t0, t1, n)
     scale_band = 1.0
     current = line
@@ -512,21 +544,20 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         centres = current.point + t[:, None] * current.direction
         band = np.broadcast_to(np.asarray(halfwidth_px(t) if callable(halfwidth_px) else halfwidth_px, float),
                                t.shape)
-        halfwidth = np.maximum(band * scale_band, np.minimum(band, 2.5))
+        halfwidth = np.maximum(band * scale_band, np.minimum(band, params.refine_min_band_px))
         stripe_reach = np.broadcast_to(np.asarray(
             outward_reach_px(t) if callable(outward_reach_px) else outward_reach_px, float), t.shape)
         profiles, offsets = sample_profiles(image, centres, current.normal, current.direction,
-                                            float(halfwidth.max()) + (float(stripe_reach.max()) if outward else 0.0) + 3.0,
-                                            step_px=0.5 if (kind == "edge" and outward) else 1.0)
+                                            float(halfwidth.max()) + (float(stripe_reach.max()) if outward else 0.0)
+                                            + KERNEL_ROOM_PX,
+                                            step_px=BOUNDARY_STEP_PX if (kind == "edge" and outward) else 1.0)
         window = np.abs(offsets)[None, :] <= halfwidth[:, None]
         if kind == "edge" and outward:
             position, strength = boundary_offsets(profiles, offsets, outward, window, stripe_reach)
-            contrast = strength / 0.5      # an area-sampled step of height h has slope ~h/2 at its ramp
+            contrast = strength / RAMP_SLOPE_PER_STEP
         elif kind == "edge":
             position, strength = edge_offsets(profiles, offsets, polarity, window=window)
-            # a blurred step of height h has a peak slope near h / (sqrt(2 pi) sigma); with the
-            # 5-tap derivative kernel and ~1 px blur, slope ~ 0.3 h: the contrast estimate
-            contrast = strength / 0.3
+            contrast = strength / SLOPE_PER_STEP
         elif kind == "stripe":
             width = stripe_width_px(t) if stripe_width_px is not None else halfwidth
             position, contrast = stripe_offsets(profiles, offsets, polarity, width)
@@ -535,44 +566,47 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
             raise ValueError(f"kind must be 'edge' or 'stripe', got {kind!r}")
         position_out = position * (outward if outward else 1)
         reach_out = stripe_reach if outward else 0.0
-        keep = np.isfinite(position) & (position_out >= -halfwidth) & (position_out <= halfwidth + reach_out) \
-            & (contrast >= min_contrast)
+        located = np.isfinite(position) & (position_out >= -halfwidth) & (position_out <= halfwidth + reach_out)
+        keep = located & (contrast >= min_contrast)
+        why = (f"{int(located.sum())} of {n} profiles hold a {kind} within the band, "
+               f"{int(keep.sum())} of at least {min_contrast:g} grey levels")
         if kind == "edge" and outward and keep.sum() >= 3:
             # the region's boundary separates its inside (past a border stripe) from its outside:
             # a marking's edge inside the region (its grey level against the surface) or a texture
             # edge outside it does not change the grey level the way the boundary does
             net = _net_step(profiles, offsets, position, outward, stripe_reach)
             sign = net_polarity or int(np.sign(np.median(net[keep])) or 1)
-            keep &= net * sign >= 0.3 * np.median(np.abs(net[keep]))
+            keep &= net * sign >= params.refine_net_fraction * np.median(np.abs(net[keep]))
+            why += f", {int(keep.sum())} changing the grey level the boundary's way"
         if keep.sum() >= 3:
             # texture beside the line (grass) is weaker than the line's own edge: drop points
             # much weaker than the line's typical strength
-            keep &= contrast >= 0.35 * np.median(contrast[keep])
+            keep &= contrast >= params.refine_weak_fraction * np.median(contrast[keep])
         if keep.sum() < 3:
-            return None
+            return NoFit(f"no consistent step along the line ({why})")
         points = centres + position[:, None] * current.normal
         weights = np.where(keep, np.minimum(strength, np.percentile(strength[keep], 90)), 0.0)
         fitted = fit_line(points, weights)
         if fitted is None:
-            return None
+            return NoFit(f"no line through the edge points ({why})")
         new_line, inliers, sigma = fitted
         # the line's visible stretch: the largest run of inliers without a long gap (stray
         # texture edges lined up beyond the runway's end are left out), then refit on it
         t_all = (points - new_line.point) @ new_line.direction
-        run = _largest_run(t_all, inliers, max(8.0, 0.15 * length))
+        run = _largest_run(t_all, inliers, max(params.refine_run_gap_px, params.refine_run_gap_fraction * length))
         if run.sum() < 3:
-            return None
+            return NoFit(f"the edge points form no continuous run ({int(inliers.sum())} inliers scattered)")
         if run.sum() < inliers.sum():
             fitted = fit_line(np.where(run[:, None], points, np.nan), np.where(run, weights, 0.0))
             if fitted is None:
-                return None
+                return NoFit("no line through the edge points of the longest run")
             new_line, inliers, sigma = fitted
         # keep the direction of travel of the prediction
         if new_line.direction @ current.direction < 0:
             new_line = PixelLine(new_line.point, -new_line.direction)
         n_in = int(inliers.sum())
         if n_in < 3:
-            return None
+            return NoFit(f"only {n_in} edge points agree on a line")
         rms, extent, sigma_offset, sigma_angle = _fit_statistics(new_line, points[inliers])
         t_profiles = (centres - new_line.point) @ new_line.direction
         in_span = np.count_nonzero((t_profiles >= extent[0] - 0.5) & (t_profiles <= extent[1] + 0.5))
@@ -589,8 +623,8 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
     return result
 
 
-def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float, min_change: float = 8.0,
-                    min_span: float = 0.6, n_samples: int = 64) -> LineFit | None:
+def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float,
+                    params: DetectorParams | None = None) -> LineFit | NoFit:
     """Move a region's refined boundary (``fit``, from grey levels) onto its chroma boundary.
 
     A runway is grey pavement, white paint and rubber; grass and fields beside it are not grey.
@@ -600,15 +634,18 @@ def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float, min_cha
     profiles across ``fit.line`` (0.5 px apart): in each, the steepest chroma rise towards the
     outside (``outward`` along ``fit.line.normal``) between ``reach_px + 1`` inside the line
     and 1.5 px outside it, at the centroid of its derivative lobe, kept when the chroma rises
-    by ``min_change`` levels across it. A line fitted to those points replaces the grey one
-    when they cover ``min_span`` of the grey line's span; otherwise None (the chroma does not
-    tell: grey ground, haze, a grey-level camera).
+    by ``params.chroma_min_change`` levels across it (``params.chroma_samples`` profiles). A
+    line fitted to those points replaces the grey one when they cover ``params.chroma_min_span``
+    of the grey line's span; otherwise NoFit with the reason (the chroma does not tell: grey
+    ground, haze, a grey-level camera).
     """
+    params = params or DetectorParams()
+    min_change, min_span = params.chroma_min_change, params.chroma_min_span
     line = fit.line
     t0, t1 = fit.extent
     if not (math.isfinite(t0) and math.isfinite(t1)) or t1 - t0 < 4.0:
-        return None
-    n = int(max(3, min(n_samples, math.floor(t1 - t0) + 1)))
+        return NoFit("the grey boundary is shorter than 4 px")
+    n = int(max(3, min(params.chroma_samples, math.floor(t1 - t0) + 1)))
     t = np.linspace(t0, t1, n)
     centres = line.point + t[:, None] * line.direction
     profiles, offsets = sample_profiles(colour, centres, line.normal, line.direction, reach_px + 5.0, step_px=0.5)
@@ -637,20 +674,21 @@ def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float, min_cha
     change = mean((rel[None, :] >= here + 1.0) & (rel[None, :] <= here + 3.0)) \
         - mean((rel[None, :] <= here - 1.0) & (rel[None, :] >= here - 3.0))
     keep = np.isfinite(rising[rows, peak]) & np.isfinite(position) & (change >= min_change)
-    if keep.sum() < 3 or np.ptp(t[keep]) < min_span * (t1 - t0):
-        return None
+    covered = float(np.ptp(t[keep]) / (t1 - t0)) if keep.sum() >= 2 else 0.0
+    if keep.sum() < 3 or covered < min_span:
+        return NoFit(f"the chroma rises by {min_change:g} levels over {100 * covered:.0f} % of the boundary "
+                     f"(< {100 * min_span:.0f} %)")
     points = centres + position[:, None] * line.normal
     fitted = fit_line(np.where(keep[:, None], points, np.nan), np.where(keep, change, 0.0))
-    if fitted is None:
-        return None
+    if fitted is None or fitted[1].sum() < 3:
+        return NoFit("the chroma boundary points are not on a line")
     new_line, inliers, _ = fitted
     if new_line.direction @ line.direction < 0:
         new_line = PixelLine(new_line.point, -new_line.direction)
-    if inliers.sum() < 3:
-        return None
     rms, extent, sigma_offset, sigma_angle = _fit_statistics(new_line, points[inliers])
     if extent[1] - extent[0] < min_span * (t1 - t0):
-        return None
+        return NoFit(f"the collinear chroma boundary points cover {100 * (extent[1] - extent[0]) / (t1 - t0):.0f} % "
+                     f"of the boundary (< {100 * min_span:.0f} %)")
     return LineFit(line=new_line, residual_px=max(rms, 0.05), support=fit.support, contrast=fit.contrast,
                    polarity=fit.polarity, extent=extent, sigma_offset_px=sigma_offset, sigma_angle_rad=sigma_angle,
                    n_inliers=int(inliers.sum()), points=points[inliers])

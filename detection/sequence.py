@@ -52,7 +52,7 @@ class DetectionSequence:
         if not isinstance(params, DetectorParams):
             raise ValueError(f"params must be DetectorParams, got {type(params).__name__}")
         self.camera = camera
-        self.params = params.scaled_to(camera.width)
+        self.params = params.scaled_to(camera)
         self.last_good: DetectionResult | None = None
         self.t_good_s: float | None = None
         self.threshold_track: list[tuple[float, float]] = []      # (t_s, width_px) accepted

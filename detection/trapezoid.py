@@ -80,13 +80,14 @@ def vanishing_point_candidates(lines: CandidateLines, params: DetectorParams, ma
     depths, to bound the search around it. A prediction is always a candidate.
     """
     out = []
-    usable = (lines.support >= 0.3) & (lines.contrast >= params.min_contrast) if len(lines) else np.zeros(0, bool)
+    usable = ((lines.support >= params.vp_min_line_support) & (lines.contrast >= params.min_contrast)
+              if len(lines) else np.zeros(0, bool))
     index = np.nonzero(usable)[0]
     if len(index):
         s0 = lines.s0[index]
         weight = lines.contrast[index] * lines.support[index] * np.minimum(
-            (lines.d_b[index] - lines.d_a[index]) * np.sqrt(1 + lines.k[index] ** 2), 200.0)
-        tolerance = params.vp_tolerance_px + 2.0 * lines.sigma_s0[index]
+            (lines.d_b[index] - lines.d_a[index]) * np.sqrt(1 + lines.k[index] ** 2), params.vp_line_weight_max_px)
+        tolerance = params.vp_tolerance_px + params.vp_sigma_factor * lines.sigma_s0[index]
         # each line's vote, spread over its tolerance; a point's score sums the lines it holds
         held = np.abs(s0[:, None] - s0[None, :]) <= np.maximum(tolerance[:, None], tolerance[None, :])
         score = held.astype(float) @ weight
@@ -111,34 +112,37 @@ def vanishing_point_candidates(lines: CandidateLines, params: DetectorParams, ma
 
 
 def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, params: DetectorParams,
-                      prediction: Prediction | None = None, max_hypotheses: int = 6,
+                      prediction: Prediction | None = None,
                       bottom_depth_px: float = math.inf) -> list[RunwayHypothesis]:
-    """Rank left/right edge pairs by the trapezoid model and the image evidence (best first)."""
+    """Rank left/right edge pairs by the trapezoid model and the image evidence (best first;
+    at most ``params.max_hypotheses``)."""
     hypotheses = []
+    tracking = prediction is not None
     points = vanishing_point_candidates(lines, params, prediction=prediction,
-                                        max_points=2 if prediction is not None else 4)
+                                        max_points=params.vp_points_tracking if tracking else params.vp_points_acquisition)
     for s0, _, (k_min, k_max), (d_min, d_max) in points:
         # the lines that found the point need not be the runway's (a taxiway, a field boundary
         # along it): search every slope, unless tracking a predicted runway
-        if prediction is not None:
-            k_range = (max(-params.max_edge_slope, k_min - 0.3), min(params.max_edge_slope, k_max + 0.3))
-        else:
-            k_range = (-params.max_edge_slope, params.max_edge_slope)
-        if prediction is not None:
-            span = max(d_max - d_min, 8.0)
-            d_range = (max(1.0, d_min - 0.3 * span), min(bottom_depth_px, d_max + 0.5 * span))
+        if tracking:
+            margin = params.tracking_slope_margin
+            k_range = (max(-params.max_edge_slope, k_min - margin), min(params.max_edge_slope, k_max + margin))
+            span = max(d_max - d_min, params.tracking_min_depth_span_px)
+            d_range = (max(1.0, d_min - params.tracking_depth_margin_far * span),
+                       min(bottom_depth_px, d_max + params.tracking_depth_margin_near * span))
             rect = rectify(image, horizon, s0, k_range, d_range)
-        else:   # the whole ground below the point, rows in proportion to depth
-            rect = rectify(image, horizon, s0, k_range, (2.0, min(bottom_depth_px, 4096.0)), max_rows=160,
-                           max_columns=3072, geometric_rows=True)
+        else:   # every slope, the whole ground below the point, rows in proportion to depth
+            k_range = (-params.max_edge_slope, params.max_edge_slope)
+            d_range = (params.acquisition_min_depth_px, min(bottom_depth_px, params.acquisition_max_depth_px))
+            rect = rectify(image, horizon, s0, k_range, d_range, max_rows=params.acquisition_rect_rows,
+                           max_columns=params.acquisition_rect_columns, geometric_rows=True)
         if rect is None:
             continue
-        edges = pencil_edges(rect, min_step=0.5 * params.min_contrast, max_edges=120)
+        edges = pencil_edges(rect, params)
         hypotheses.extend(_pairs(rect, edges, params, prediction, horizon.camera.fx, bottom_depth_px))
     hypotheses.sort(key=lambda h: -h.score)
-    hypotheses = _prefer_enclosing(hypotheses)
-    hypotheses = _prefer_widest_parallel(hypotheses)
-    return hypotheses[:max_hypotheses]
+    hypotheses = _prefer_enclosing(hypotheses, params)
+    hypotheses = _prefer_widest_parallel(hypotheses, params)
+    return hypotheses[:params.max_hypotheses]
 
 
 def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
@@ -153,7 +157,7 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
     d_far = np.maximum(edges.d_a[L], edges.d_a[R])
     d_near = np.minimum(edges.d_b[L], edges.d_b[R])
     ok &= d_near > d_far
-    ok &= (edges.k[R] - edges.k[L]) * d_near >= 3.0
+    ok &= (edges.k[R] - edges.k[L]) * d_near >= params.pair_min_width_px
     # a runway is a long strip: with d = f h / x (x the distance ahead, h the height) and
     # W / h = k_R - k_L, the strip seen from depth d_far to d_near is
     # L / W = f (d_near - d_far) / ((k_R - k_L) d_near d_far) long (truncated spans only
@@ -170,7 +174,7 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
     width = edges.k[ri] - edges.k[li]
     k_c = 0.5 * (edges.k[li] + edges.k[ri])
     length = (near - far) * np.sqrt(1 + k_c ** 2)
-    length_term = 1.0 - np.exp(-length / 30.0)
+    length_term = 1.0 - np.exp(-length / params.pair_length_scale_px)
     prior = np.ones(len(li))
     if prediction is not None:
         depths = np.array([max(prediction.d_far, 1.0), max(prediction.d_near, 1.0)])
@@ -188,42 +192,45 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
                       - np.maximum(far[:, None], edges.bands[None, :, 0]), 0.0, None)
     band_w = overlap / np.maximum(edges.bands[None, :, 1] - edges.bands[None, :, 0], 1e-9)
     k_l, k_r = edges.k[li], edges.k[ri]
-    inside = 0.5 * (edges.band_means(band_w, rect.k, k_l + 0.12 * width, k_c - 0.05 * width)
-                    + edges.band_means(band_w, rect.k, k_c + 0.05 * width, k_r - 0.12 * width))
-    out_l = edges.band_means(band_w, rect.k, k_l - 0.4 * width, k_l - 0.12 * width)
-    out_r = edges.band_means(band_w, rect.k, k_r + 0.12 * width, k_r + 0.4 * width)
+    margin, gap = params.pair_interior_margin, params.pair_quick_centre_gap
+    out_in, out_out = params.pair_outside_band
+    inside = 0.5 * (edges.band_means(band_w, rect.k, k_l + margin * width, k_c - gap * width)
+                    + edges.band_means(band_w, rect.k, k_c + gap * width, k_r - margin * width))
+    out_l = edges.band_means(band_w, rect.k, k_l - out_out * width, k_l - out_in * width)
+    out_r = edges.band_means(band_w, rect.k, k_r + out_in * width, k_r + out_out * width)
     expected = np.where(edges.polarity[li] < 0, -1.0, 1.0)
     contrast_min = np.maximum(np.minimum(c_l, c_r), 1.0)
     quick_interior = np.nan_to_num(np.clip(expected * (inside - 0.5 * (out_l + out_r)) / contrast_min, 0.0, 1.0))
     quick_outside = np.nan_to_num(np.clip(1.0 - np.abs(out_l - out_r) / contrast_min, 0.0, 1.0))
-    pre_score = (length_term * np.minimum(c_l, c_r) * (0.5 + symmetry) * prior * quick_interior
-                 * (0.3 + quick_outside) * np.sqrt(width))
+    pre_score = (length_term * np.minimum(c_l, c_r) * (params.score_symmetry_floor + symmetry) * prior
+                 * quick_interior * (params.score_outside_floor + quick_outside) * np.sqrt(width))
     hypotheses = []
-    for p in np.argsort(-pre_score)[:24]:
+    for p in np.argsort(-pre_score)[:params.pair_max_examined]:
         if pre_score[p] <= 0:
             continue
-        inside = _inside_evidence(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p])
+        inside = _inside_evidence(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p], params)
         contrast = max(float(min(c_l[p], c_r[p])), 1.0)
         # inside darker than outside when the left edge darkens towards +s, and vice versa;
         # a runway's inside differs from its outside by about its edges' step
         expected = -1.0 if edges.polarity[li[p]] < 0 else 1.0
         interior_term = float(np.clip(expected * inside["interior"] / contrast, 0.0, 1.0))
-        if interior_term <= 0.1:
+        if interior_term <= params.pair_min_interior:
             continue
         step = max(abs(inside["interior"]), contrast)
         outside_term = float(np.clip(1.0 - abs(inside["outside_gap"]) / step, 0.0, 1.0))
-        uniform_term = float(np.clip(1.0 - inside["spread"] / (2.0 * step), 0.1, 1.0))
-        # a painted centre line (white; a dark stripe counts half)
-        centre_term = inside["centre_rows"] * (1.0 if inside["centre_polarity"] > 0 else 0.5)
+        uniform_term = float(np.clip(1.0 - inside["spread"] / (params.score_spread_scale * step),
+                                     params.score_uniform_floor, 1.0))
+        # a painted centre line (white; a dark stripe counts less)
+        centre_term = inside["centre_rows"] * (1.0 if inside["centre_polarity"] > 0 else params.score_dark_centre_weight)
         # width: among parallel paved strips the runway is the widest (a taxiway is about half
         # as wide, a road a fifth), but a wide pair of unrelated lines must not win by width
         width_term = float(width[p]) ** 0.5
         # a runway is a finite strip: it ends (threshold, runway end) inside the image, where a
         # road or a field boundary runs on to the horizon and out of the frame
-        ends = _strip_ends(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p], bottom_depth_px)
-        ends_term = 0.4 + 0.3 * ends
-        score = float(pre_score[p] * interior_term * (0.3 + outside_term) * uniform_term * (0.5 + centre_term)
-                      * width_term * ends_term)
+        ends = _strip_ends(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p], bottom_depth_px, params)
+        ends_term = params.score_ends_base + params.score_ends_per_end * ends
+        score = float(pre_score[p] * interior_term * (params.score_outside_floor + outside_term) * uniform_term
+                      * (params.score_centre_floor + centre_term) * width_term * ends_term)
         centre_polarity = inside["centre_polarity"]
         hypotheses.append(RunwayHypothesis(
             s0=rect.s0, k_left=float(edges.k[li[p]]), k_right=float(edges.k[ri[p]]), d_far=float(far[p]),
@@ -238,7 +245,8 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
     return hypotheses
 
 
-def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: float, d_near: float) -> dict:
+def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: float, d_near: float,
+                     params: DetectorParams) -> dict:
     """What lies between and beside a pair of edges, from the rectified image.
 
     Returns a dict: ``interior`` (median grey inside minus outside), ``outside_gap`` (median
@@ -263,20 +271,23 @@ def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: fl
         v = np.concatenate([block[:, part].ravel() for part in parts])
         return v[np.isfinite(v)]
 
-    inside = values(columns(0.12, 0.42), columns(0.58, 0.88))
-    out_left, out_right = values(columns(-0.4, -0.12)), values(columns(1.12, 1.4))
+    margin, gap = params.pair_interior_margin, params.pair_centre_gap
+    out_in, out_out = params.pair_outside_band
+    inside = values(columns(margin, 0.5 - gap), columns(0.5 + gap, 1.0 - margin))
+    out_left, out_right = values(columns(-out_out, -out_in)), values(columns(1.0 + out_in, 1.0 + out_out))
     if inside.size < 4 or out_left.size < 4 or out_right.size < 4:
         return empty
     q25, q50, q75 = np.percentile(inside, [25, 50, 75])
     m_left, m_right = float(np.median(out_left)), float(np.median(out_right))
     result = {"interior": float(q50 - 0.5 * (m_left + m_right)), "outside_gap": m_left - m_right,
               "spread": float(q75 - q25), "centre_polarity": 0, "centre_rows": 0.0}
-    # centre stripe: per row, the mean within 1.5 % of the width of the midline against the
-    # mean from 4 to 8 % on either side
+    # centre stripe: per row, the mean near the midline against the mean a little farther out on
+    # either side
     centre = int(rect.column_of(0.5 * (k_left + k_right)))
-    half = max(1, int(round(0.015 * width / rect.k_step)))
-    inner = max(half + 1, int(round(0.04 * width / rect.k_step)))
-    outer = max(inner + 1, int(round(0.08 * width / rect.k_step)))
+    side_in, side_out = params.centre_stripe_sides
+    half = max(1, int(round(params.centre_stripe_halfwidth * width / rect.k_step)))
+    inner = max(half + 1, int(round(side_in * width / rect.k_step)))
+    outer = max(inner + 1, int(round(side_out * width / rect.k_step)))
     if centre - outer < 0 or centre + outer >= block.shape[1]:
         return result
     mid = row_mean(block[:, centre - half:centre + half + 1])
@@ -286,14 +297,14 @@ def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: fl
     ridge = ridge[np.isfinite(ridge)]
     if ridge.size < 2:
         return result
-    threshold = max(2.0, 0.2 * abs(result["interior"]))
+    threshold = max(params.centre_stripe_min_step, params.centre_stripe_fraction * abs(result["interior"]))
     bright, dark = float(np.mean(ridge > threshold)), float(np.mean(ridge < -threshold))
     result["centre_polarity"], result["centre_rows"] = (1, bright) if bright >= dark else (-1, dark)
     return result
 
 
 def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, d_near: float,
-                bottom_depth_px: float) -> int:
+                bottom_depth_px: float, params: DetectorParams) -> int:
     """How many ends (0, 1, 2) the strip between two edges shows inside the rectified rows.
 
     Row by row, the strip's surface (the lower quartile between the edges when it is darker
@@ -304,15 +315,18 @@ def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, 
     """
     width = k_right - k_left
     f = (rect.k - k_left) / width
-    inside = (f >= 0.1) & (f <= 0.9)
-    outside = ((f >= -0.38) & (f <= -0.12)) | ((f >= 1.12) & (f <= 1.38))
+    in_lo, in_hi = params.strip_inside_band
+    side_in, side_out = params.strip_side_band
+    inside = (f >= in_lo) & (f <= in_hi)
+    outside = ((f >= -side_out) & (f <= -side_in)) | ((f >= 1.0 + side_in) & (f <= 1.0 + side_out))
     if inside.sum() < 2 or outside.sum() < 2:
         return 0
     with np.errstate(invalid="ignore"):
         out_level = row_quantile(rect.values[:, outside], 0.5)
         low = row_quantile(rect.values[:, inside], 0.25)
         high = row_quantile(rect.values[:, inside], 0.75)
-    core = rect.rows_between(d_far + 0.2 * (d_near - d_far), d_near - 0.2 * (d_near - d_far))
+    core_margin = params.strip_core_margin * (d_near - d_far)
+    core = rect.rows_between(d_far + core_margin, d_near - core_margin)
     if core.sum() < 1:
         core = rect.rows_between(d_far, d_near)
     if core.sum() < 1:
@@ -322,41 +336,41 @@ def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, 
     reference = finite_median(contrast[core])
     if not math.isfinite(reference) or reference == 0.0:
         return 0
-    strip = np.nan_to_num(contrast * np.sign(reference), nan=-1.0) > 0.5 * abs(reference)
-    ground = np.nan_to_num(contrast * np.sign(reference), nan=1e9) < 0.25 * abs(reference)
+    strip = np.nan_to_num(contrast * np.sign(reference), nan=-1.0) > params.strip_level_fraction * abs(reference)
+    ground = np.nan_to_num(contrast * np.sign(reference), nan=1e9) < params.ground_level_fraction * abs(reference)
     rows = np.nonzero(core)[0]
     ends = 0
     for start, step in ((rows[0], -1), (rows[-1], 1)):
         i = start
         while 0 <= i + step < len(strip) and strip[i + step]:
             i += step
-        beyond = np.arange(i + step, i + step * 4, step)
+        beyond = np.arange(i + step, i + step * (params.strip_end_rows + 1), step)
         beyond = beyond[(beyond >= 0) & (beyond < len(strip))]
-        limit_ok = rect.d[i] > 3.0 if step < 0 else rect.d[i] < bottom_depth_px - 3.0
-        if limit_ok and len(beyond) >= 2 and ground[beyond].mean() >= 0.5:
+        clearance = params.strip_end_clearance_px
+        limit_ok = rect.d[i] > clearance if step < 0 else rect.d[i] < bottom_depth_px - clearance
+        if limit_ok and len(beyond) >= min(2, params.strip_end_rows) and ground[beyond].mean() >= 0.5:
             ends += 1
     return ends
 
 
-def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], score_ratio: float = 0.3,
-                            strip_quality: float = 0.5) -> list[RunwayHypothesis]:
+def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], params: DetectorParams) -> list[RunwayHypothesis]:
     """Of strips running side by side (one vanishing point, disjoint), put the widest first.
 
     A runway and its parallel taxiway (half as wide), or a road along it, all look like long
     paved strips; the runway is the widest. Wherever a strip stands in the ranking, a wider
-    strip beside it is moved just ahead of it. Only convincing strips count: a score within
-    ``score_ratio`` of the other's, an inside that differs from the outside as much as the
-    edges say and is mostly one surface (its spread within 1.5 times that difference; a
-    runway's markings spread it), the same ground on
-    both sides, and an end in view.
+    strip beside it (``params.parallel_min_width_ratio``) is moved just ahead of it. Only
+    convincing strips count: a score at least ``params.parallel_score_ratio`` of the other's, an
+    inside that differs from the outside as much as the edges say and is mostly one surface
+    (``strip_min_interior``, ``strip_max_spread``: a runway's markings spread it), the same ground
+    on both sides (``strip_max_outside_gap``), and an end in view.
     """
     def is_strip(h):
         e = h.evidence
         contrast = max(e.get("contrast", 0.0), 1e-6)
         interior = abs(e.get("interior", 0.0))
-        return (interior >= strip_quality * contrast
-                and abs(e.get("outside_gap", math.inf)) <= 0.5 * max(interior, contrast)
-                and e.get("spread", math.inf) <= 1.5 * interior    # mostly one surface inside
+        return (interior >= params.strip_min_interior * contrast
+                and abs(e.get("outside_gap", math.inf)) <= params.strip_max_outside_gap * max(interior, contrast)
+                and e.get("spread", math.inf) <= params.strip_max_spread * interior    # mostly one surface
                 and e.get("ends", 0) >= 1)
 
     ordered = []
@@ -366,9 +380,9 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], score_ratio: flo
         if is_strip(h):
             width = h.k_right - h.k_left
             rivals = [r for r in remaining
-                      if abs(r.s0 - h.s0) < 1e-6 and r.score >= score_ratio * h.score and is_strip(r)
+                      if abs(r.s0 - h.s0) < 1e-6 and r.score >= params.parallel_score_ratio * h.score and is_strip(r)
                       and (r.k_left >= h.k_right or r.k_right <= h.k_left)
-                      and (r.k_right - r.k_left) > 1.3 * width]
+                      and (r.k_right - r.k_left) > params.parallel_min_width_ratio * width]
             if rivals:
                 widest = max(rivals, key=lambda r: r.k_right - r.k_left)
                 remaining.remove(widest)
@@ -378,7 +392,7 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], score_ratio: flo
     return ordered
 
 
-def _prefer_enclosing(hypotheses: list[RunwayHypothesis]) -> list[RunwayHypothesis]:
+def _prefer_enclosing(hypotheses: list[RunwayHypothesis], params: DetectorParams) -> list[RunwayHypothesis]:
     """Move ahead of a hypothesis any that encloses it with the same midline and a comparable
     score: the runway's outer boundary rather than the inner edges of its side stripes."""
     if len(hypotheses) < 2:
@@ -388,7 +402,8 @@ def _prefer_enclosing(hypotheses: list[RunwayHypothesis]) -> list[RunwayHypothes
     for other in hypotheses[1:]:
         other_width = other.k_right - other.k_left
         if (abs(other.s0 - best.s0) < 1e-6 and other.k_left < best.k_left and other.k_right > best.k_right
-                and abs(other.k_centre - best.k_centre) < 0.15 * width
-                and other_width < 1.4 * width and other.score >= 0.25 * best.score):
+                and abs(other.k_centre - best.k_centre) < params.enclosing_centre_tolerance * width
+                and other_width < params.enclosing_max_width_ratio * width
+                and other.score >= params.enclosing_score_ratio * best.score):
             return [other] + [h for h in hypotheses if h is not other]
     return hypotheses

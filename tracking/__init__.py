@@ -31,9 +31,19 @@ Modules (each one idea):
 from __future__ import annotations
 
 import importlib
+from typing import TYPE_CHECKING
 
-# Exports are loaded on first use (PEP 562), so that ``visland.tracking.cli`` (imported by the
-# ``visland`` command for every subcommand) does not pull in OpenCV.
+# Exports load on first use (PEP 562): ``visland.tracking.cli``, imported by the ``visland``
+# command for every subcommand, must not pull in OpenCV and SciPy (0.3-0.4 s against 0.23 s
+# for a whole ``visland scenarios``; see visland.detection). The imports below are the same
+# names for readers and editors ("go to definition"); they are not executed.
+if TYPE_CHECKING:
+    from visland.tracking.anchoring import AnchorObservation
+    from visland.tracking.motion import Attitude
+    from visland.tracking.params import INCONSISTENT_ACTIONS, UPDATE_POLICIES, TrackerParams
+    from visland.tracking.run import TrackRun, track_source
+    from visland.tracking.tracker import MEASURED_STATUSES, POINT_STATUSES, PointReport, PointTracker, TrackStep
+
 _EXPORTS = {
     "PointTracker": "visland.tracking.tracker", "TrackStep": "visland.tracking.tracker",
     "PointReport": "visland.tracking.tracker", "MEASURED_STATUSES": "visland.tracking.tracker",

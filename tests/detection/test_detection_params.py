@@ -5,7 +5,9 @@ import json
 
 import pytest
 
+from visland.camera import CameraModel
 from visland.detection import DetectorParams
+from visland.detection.params import NOT_SCALED_PX, SCALES_WITH_FOCAL, SCALES_WITH_SIZE
 
 
 def test_defaults_are_valid_and_frozen():
@@ -70,5 +72,48 @@ def test_scaling_to_the_frame_size():
     # idempotent, and back again
     assert half.scaled_to(1024) is half
     assert half.scaled_to(2048).min_edge_length_px == pytest.approx(params.min_edge_length_px)
-    with pytest.raises(ValueError, match="image_side_px"):
+    with pytest.raises(ValueError, match="at least 16 px"):
         params.scaled_to(8)
+    with pytest.raises(ValueError, match="CameraModel"):
+        params.scaled_to("1024")
+
+
+def test_every_pixel_length_scales_or_says_why_not():
+    names = {f.name for f in dataclasses.fields(DetectorParams)}
+    classified = set(SCALES_WITH_SIZE) | set(SCALES_WITH_FOCAL) | set(NOT_SCALED_PX)
+    assert classified <= names
+    assert not set(SCALES_WITH_SIZE) & set(SCALES_WITH_FOCAL)
+    pixel_fields = {n for n in names if n.endswith(("_px", "_pxps")) or "_px_" in n}
+    assert pixel_fields - classified == set()
+
+
+def test_a_non_square_camera_scales_lengths_by_its_side_and_angles_by_its_focal_length():
+    """1920x1080 behind a 62 deg lens: resolution lengths follow the 1920 px side (x0.94),
+    angular ones the focal length (1598 px: x0.65), every one of them."""
+    camera = CameraModel.from_fov(1920, 1080, 62.0)
+    params = DetectorParams()
+    scaled = params.scaled_to(camera)
+    k_size, k_focal = 1920 / 2048, camera.fx / params.reference_focal_px
+    assert k_focal == pytest.approx(0.6464, abs=1e-3)
+    for name, floor in SCALES_WITH_SIZE.items():
+        if floor is not None:
+            assert getattr(scaled, name) == pytest.approx(max(floor, getattr(params, name) * k_size)), name
+    for name, floor in SCALES_WITH_FOCAL.items():
+        assert getattr(scaled, name) == pytest.approx(max(floor, getattr(params, name) * k_focal)), name
+    assert scaled.acquisition_max_side_px == round(1024 * k_size)
+    for name in NOT_SCALED_PX:
+        if name not in ("reference_side_px", "reference_focal_px"):
+            assert getattr(scaled, name) == getattr(params, name), name
+    assert (scaled.reference_side_px, scaled.reference_focal_px) == (1920, pytest.approx(camera.fx))
+    assert scaled.scaled_to(camera) is scaled
+    # back to the reference camera: the unfloored lengths come back
+    again = scaled.scaled_to(CameraModel.default(2048))
+    assert again.roi_margin_px == pytest.approx(params.roi_margin_px)
+    assert again.min_edge_length_px == pytest.approx(params.min_edge_length_px)
+
+
+@pytest.mark.parametrize("field, value", [("pair_outside_band", (0.4, 0.12)), ("strip_side_band", (0.1,)),
+                                          ("centre_stripe_sides", "wide")])
+def test_band_tuples_are_checked(field, value):
+    with pytest.raises(ValueError, match=field):
+        DetectorParams(**{field: value})

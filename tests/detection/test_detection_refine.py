@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from visland.detection.refine import PixelLine, fit_line, refine_line
+from visland.detection import DetectorParams
+from visland.detection.refine import NoFit, PixelLine, fit_line, refine_line
 
 
 def area_sampled(size, grey_of, supersample=16, noise=0.0, seed=0):
@@ -94,7 +95,12 @@ def test_line_fit_ignores_outliers():
     assert sigma == pytest.approx(0.1, rel=0.3)
 
 
-def test_no_edge_gives_none():
+def test_no_edge_gives_no_fit_with_the_reason():
     flat = np.full((80, 80), 100.0, np.float32) + np.random.default_rng(5).normal(0, 1.0, (80, 80)).astype(np.float32)
-    assert refine_line(flat, start_line(), (-25, 25), "edge", halfwidth_px=6, min_contrast=6.0, outward=1,
-                       outward_reach_px=1.5) is None
+    fit = refine_line(flat, start_line(), (-25, 25), "edge", halfwidth_px=6, outward=1, outward_reach_px=1.5,
+                      params=DetectorParams(min_contrast=6.0))
+    assert isinstance(fit, NoFit) and not fit
+    assert "of at least 6 grey levels" in fit.reason, fit.reason
+    # a span too short to sample says so
+    short = refine_line(flat, start_line(), (0, 1), "edge", halfwidth_px=6)
+    assert not short and "too short" in short.reason
