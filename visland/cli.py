@@ -23,6 +23,7 @@ STAGE_CLI_MODULES = (
     "visland.estimation.cli",
     "visland.datasets.generate_cli",
     "visland.datasets.cli",
+    "visland.footage_cli",
 )
 
 

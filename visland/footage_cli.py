@@ -1,0 +1,122 @@
+"""Command-line registration of the raw-footage helpers (light: no heavy imports here).
+
+- ``visland calibrate FOOTAGE --board 9x6 --square-mm 25 --out camera.json``: OpenCV's chessboard
+  calibration (:mod:`visland.lens`); or ``--hfov-deg`` for a camera.json from a field of view.
+"""
+from __future__ import annotations
+
+import argparse
+
+
+def _size(text: str) -> tuple[int, int]:
+    parts = text.lower().split("x")
+    try:
+        width, height = (int(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels, e.g. 1280x720, got {text!r}") from None
+    return width, height
+
+
+def _three_angles(text: str) -> tuple[float, float, float]:
+    try:
+        values = tuple(float(p) for p in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected three comma-separated degrees R,P,Y, got {text!r}") from None
+    if len(values) != 3:
+        raise argparse.ArgumentTypeError(f"expected three comma-separated degrees R,P,Y, got {text!r}")
+    return values
+
+
+def _check_out(path, force: bool):
+    from pathlib import Path
+    out = Path(path)
+    if out.is_dir():
+        raise ValueError(f"{out}: is a folder; --out names the camera.json file to write")
+    if out.exists() and not force:
+        raise ValueError(f"{out}: output file exists; choose another --out or pass --force to replace it")
+    if not out.parent.is_dir():
+        raise ValueError(f"{out.parent}: folder not found for --out")
+    return out
+
+
+def _cmd_calibrate(args) -> int:
+    import math
+
+    from visland.camera import CameraModel
+    from visland.footage import sample_footage
+    out = _check_out(args.out, args.force)
+    if args.hfov_deg is not None:
+        if args.footage is None and args.size is None:
+            raise ValueError("--hfov-deg needs the frame size: give --size WxH or the footage")
+        size = args.size
+        if args.footage is not None:
+            frames, _ = sample_footage(args.footage, 1)
+            height, width = frames[0].image.shape[:2]
+            if size is not None and size != (width, height):
+                raise ValueError(f"--size {size[0]}x{size[1]} but {frames[0].name} is {width}x{height}")
+            size = (width, height)
+        camera = CameraModel.from_fov(size[0], size[1], args.hfov_deg, mount_rpy_deg=args.mount_deg)
+        camera.save(out)
+        print(f"camera from a {args.hfov_deg:g} deg horizontal field of view: {camera.width}x{camera.height}, "
+              f"fx = fy = {camera.fx:.2f} px, principal point at the centre, no distortion (a guess: "
+              f"calibrate with a chessboard when you can)")
+        print(f"wrote {out}")
+        return 0
+    from visland.lens import calibrate_views, find_board_views, parse_board
+    if args.footage is None:
+        raise ValueError("give the chessboard footage (a video or a folder of images), or --hfov-deg for a "
+                         "camera from a field of view")
+    if args.size is not None:
+        raise ValueError("--size goes with --hfov-deg; a calibration takes the size from the footage")
+    board = parse_board(args.board)
+    if args.square_mm is None or not (math.isfinite(args.square_mm) and args.square_mm > 0):
+        raise ValueError(f"--square-mm must be the positive side of a board square in millimetres, got {args.square_mm}")
+    if args.examine < 1:
+        raise ValueError(f"--examine must be at least 1 frame, got {args.examine}")
+    frames, total = sample_footage(args.footage, args.examine)
+    views = find_board_views(frames, board)
+    if not views:
+        raise ValueError(f"{args.footage}: no {args.board} chessboard found in any of the {len(frames)} frames "
+                         f"examined (--board counts inner corners, squares minus one; the whole board must be "
+                         f"in view)")
+    height, width = frames[0].image.shape[:2]
+    print(f"{args.footage}: {total} frames, {len(frames)} examined, board found in {len(views)}")
+    result = calibrate_views(views, board, args.square_mm / 1000.0, (width, height), max_views=args.max_views,
+                             mount_rpy_deg=args.mount_deg)
+    for line in result.summary_lines():
+        print(line)
+    if result.rms_px > 1.0:
+        print("RMS above 1 px: blurred or badly lit views, or a board that is not flat; check the footage")
+    result.camera.save(out)
+    print(f"wrote {out}")
+    return 0
+
+
+def register(subparsers):
+    """Add the footage helpers' commands to the visland parser."""
+    p = subparsers.add_parser(
+        "calibrate", help="camera.json with lens distortion from chessboard footage (or from a field of view)",
+        description="OpenCV's ordinary chessboard calibration: frames sampled evenly over a video or a folder of "
+                    "images (DIR/frames/ if present, else DIR) are searched for the board "
+                    "(findChessboardCorners, cornerSubPix); at most --max-views of the views found, spread over "
+                    "the footage, go to calibrateCamera (fx, fy, cx, cy and k1, k2, p1, p2, k3). Writes camera.json "
+                    "(SPEC format, with \"distortion\") and prints the RMS reprojection error and the views used. "
+                    "Without a calibration, --hfov-deg writes a pinhole camera from the horizontal field of view "
+                    "(size from --size or the footage); distortion is then not estimated.")
+    p.add_argument("footage", nargs="?", metavar="VIDEO|DIR", help="chessboard video or folder of images")
+    p.add_argument("--out", required=True, metavar="FILE", help="camera.json to write (refused if it exists)")
+    p.add_argument("--board", default="9x6", metavar="COLSxROWS",
+                   help="inner corners of the chessboard (squares minus one), default 9x6")
+    p.add_argument("--square-mm", type=float, default=None, metavar="MM",
+                   help="side of one square in millimetres (required for a calibration)")
+    p.add_argument("--max-views", type=int, default=40, metavar="N",
+                   help="most board views used, spread over the footage (default 40)")
+    p.add_argument("--examine", type=int, default=200, metavar="N",
+                   help="frames searched for the board, spread over the footage (default 200)")
+    p.add_argument("--mount-deg", type=_three_angles, default=(0.0, 0.0, 0.0), metavar="R,P,Y",
+                   help="camera mounting on the body written to camera.json, degrees (default 0,0,0)")
+    p.add_argument("--hfov-deg", type=float, default=None, metavar="DEG",
+                   help="no calibration: camera from this horizontal field of view (no distortion)")
+    p.add_argument("--size", type=_size, default=None, metavar="WxH", help="frame size for --hfov-deg without footage")
+    p.add_argument("--force", action="store_true", help="replace an existing output file")
+    p.set_defaults(func=_cmd_calibrate)
