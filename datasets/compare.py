@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from visland.contracts import atomic_write_text, json_ready, read_estimates, read_truth, write_csv
+from visland.userfiles import read_json_object
 
 __all__ = ["RunResult", "load_run", "run_figures", "compare_runs", "error_at_height_of", "QUANTITIES"]
 
@@ -65,10 +66,7 @@ def load_run(path) -> RunResult:
     info_path = path / "run.json"
     if not info_path.exists():
         raise ValueError(f"{info_path}: not found (is {path} a 'visland process' output folder?)")
-    try:
-        info = json.loads(info_path.read_text())
-    except json.JSONDecodeError as error:
-        raise ValueError(f"{info_path}: not valid JSON ({error.msg})") from None
+    info = read_json_object(info_path, "run description")
     truth_path = path / "truth.csv"
     if not truth_path.exists():
         raise ValueError(f"{truth_path}: not found; comparison needs the run's truth")

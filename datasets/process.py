@@ -183,7 +183,7 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
         atomic_write_text(staging / "run.json", json.dumps(json_ready(run), indent=2) + "\n")
         if options.report:
             _write_report(staging, source, measurements, metrics, deviations, run)
-    _print_summary(run, metrics, deviations, out_dir, echo)
+    _print_summary(run, metrics, deviations, out_dir, echo, report=options.report)
     return run
 
 
@@ -220,7 +220,7 @@ def _write_report(folder: Path, source, measurements, metrics, deviations, run) 
                  metrics=merged or None, flagged=measurements.flagged)
 
 
-def _print_summary(run, metrics, deviations, out_dir, echo) -> None:
+def _print_summary(run, metrics, deviations, out_dir, echo, report: bool = True) -> None:
     t = run["throughput"]
     echo(f"{run['n_frames']} frames: runway found in {run['n_found']}, {run['n_flagged']} unusable; "
          f"{t['fps_with_decoding'] or 0:.1f} frames/s with decoding, {t['fps_analysis_only'] or 0:.1f} frames/s "
@@ -236,4 +236,4 @@ def _print_summary(run, metrics, deviations, out_dir, echo) -> None:
             echo(f"{observer:14s} {f(m.get('conv_time_5pct_s'))} {f(m.get('err_400ft_m'))} {f(m.get('err_200ft_m'))} "
                  f"{f(m.get('err_100ft_m'))} {f(d.get('dY_err_100ft_m'))} {f(d.get('dX_err_100ft_m'))}")
     echo(f"wrote {out_dir}/: measurements.csv estimates.csv run.json"
-         + (" metrics.json" if metrics else "") + " report.html")
+         + (" metrics.json" if metrics else "") + (" report.html" if report else ""))

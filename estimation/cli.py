@@ -28,7 +28,17 @@ def _expand_observers(names):
 
 
 def _cmd_estimate(args) -> int:
+    from pathlib import Path
+
     from visland.estimation.command import EstimateOptions, estimate_folder
+    from visland.userfiles import check_output_file
+    # one rule with process, detect and track: nothing is replaced without --force, and that
+    # includes the metrics.json written beside the estimates when the folder has truth
+    out = check_output_file(args.out, force=args.force)
+    metrics = out.parent / "metrics.json"
+    if metrics.exists() and not args.force and (Path(args.dir) / "truth.csv").exists():
+        raise ValueError(f"{metrics}: exists and would be replaced by the metrics of {out.name}; choose another "
+                         "--out folder or pass --force to replace it")
     options = EstimateOptions(observers=_expand_observers(args.observer), measurements=args.measurements,
                               initial_height_m=args.initial_height, initial_error=args.initial_error,
                               aim_distance_m=args.aim_distance, params_file=args.params)
@@ -59,7 +69,7 @@ def register(subparsers):
         description="Estimate the aircraft's position relative to the runway from image measurements and "
                     "telemetry with the thesis's observers. Writes estimates.csv (one row per observer per "
                     "frame; coasting=1 where no measurement corrected the frame) and, when DIR/truth.csv "
-                    "exists, metrics.json beside it.")
+                    "exists, metrics.json beside it. Neither is replaced without --force.")
     p.add_argument("dir", metavar="DIR", help="folder with telemetry.csv, camera.json (and truth.csv, labels.csv)")
     p.add_argument("--measurements", required=True, metavar="FILE|ideal",
                    help="a measurements.csv, or 'ideal' for the folder's exact labels.csv")
@@ -74,6 +84,7 @@ def register(subparsers):
                    help="aiming point distance past the threshold, for dX (default 320 m)")
     p.add_argument("--params", default=None, metavar="FILE",
                    help="observer parameters, TOML or JSON, one table per observer name")
+    p.add_argument("--force", action="store_true", help="replace an existing FILE (and metrics.json beside it)")
     p.set_defaults(func=_cmd_estimate)
 
     p = subparsers.add_parser(

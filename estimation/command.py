@@ -24,6 +24,7 @@ import numpy as np
 from visland.contracts import ESTIMATE_EXTRA_COLUMNS, json_ready
 from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M
 from visland.estimation.registry import make_observer, observer_class, observer_features
+from visland.userfiles import read_json_object, read_toml_object
 
 __all__ = ["EstimateOptions", "estimate_folder", "load_observer_params", "ESTIMATE_EXTRA_COLUMNS"]
 
@@ -63,18 +64,9 @@ def load_observer_params(path) -> dict:
         response_time_s = 8.0
         damping = 0.8
     """
-    import tomllib
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as error:
-        raise ValueError(f"{path}: cannot read the observer parameters ({error.strerror})") from None
-    try:
-        data = tomllib.loads(text) if path.suffix == ".toml" else json.loads(text)
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as error:
-        raise ValueError(f"{path}: not valid {'TOML' if path.suffix == '.toml' else 'JSON'} ({error})") from None
-    if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected tables named after observers")
+    what = "observer parameter file"
+    data = read_toml_object(path, what) if path.suffix == ".toml" else read_json_object(path, what)
     out = {}
     for name, table in data.items():
         cls = observer_class(name)

@@ -205,7 +205,7 @@ def read_csv(path, required, text_columns=(), optional_empty=(), name=None) -> T
     path = Path(path)
     label = name or str(path)
     try:
-        handle = path.open(newline="")
+        handle = path.open(newline="", encoding="utf-8-sig")     # a spreadsheet's byte-order mark is not a column name
     except FileNotFoundError:
         raise ValueError(f"{label}: file not found") from None
     except IsADirectoryError:

@@ -19,10 +19,10 @@ round trip gives back an equal (hashable) object.
 from __future__ import annotations
 
 import json
-import tomllib
 from dataclasses import MISSING, asdict, fields
 from pathlib import Path
 from typing import ClassVar
+from visland.userfiles import read_json_object, read_toml_object
 
 __all__ = ["ParamsFile", "toml_value"]
 
@@ -94,18 +94,8 @@ class ParamsFile:
         suffix = path.suffix.lower()
         if suffix not in (".json", ".toml"):
             raise ValueError(f"{path}: {cls.params_kind} parameter files are .json or .toml")
-        try:
-            text = path.read_text()
-        except FileNotFoundError:
-            raise ValueError(f"{path}: {cls.params_kind} parameter file not found") from None
-        except (OSError, UnicodeDecodeError) as error:
-            raise ValueError(f"{path}: cannot read {cls.params_kind} parameters ({error})") from None
-        try:
-            data = tomllib.loads(text) if suffix == ".toml" else json.loads(text)
-        except tomllib.TOMLDecodeError as error:
-            raise ValueError(f"{path}: not valid TOML ({error})") from None
-        except json.JSONDecodeError as error:
-            raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
+        what = f"{cls.params_kind} parameter file"
+        data = read_toml_object(path, what) if suffix == ".toml" else read_json_object(path, what)
         if suffix == ".toml" and cls.toml_table and set(data) == {cls.toml_table}:
             data = data[cls.toml_table]
         return cls.from_dict(data, source=str(path))

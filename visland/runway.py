@@ -17,12 +17,12 @@ edge is at ``y = -width/2``.
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from visland.userfiles import read_json_object
 
 __all__ = ["Runway", "RUNWAY_SIZES", "GLIDE_SLOPE_RAD", "CORNER_NAMES", "MAX_SLOPE_PCT"]
 
@@ -157,12 +157,7 @@ class Runway:
     @classmethod
     def load(cls, path) -> "Runway":
         path = Path(path)
-        try:
-            data = json.loads(path.read_text())
-        except FileNotFoundError:
-            raise ValueError(f"{path}: runway file not found") from None
-        except json.JSONDecodeError as error:
-            raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
+        data = read_json_object(path, "runway file")
         for key in ("length_m", "width_m", "aim_distance_m"):
             if key not in data:
                 raise ValueError(f"{path}: missing field '{key}'")

@@ -20,11 +20,11 @@ User scenario files are TOML; see :func:`load_scenario_file` and the README.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 from visland.runway import Runway
+from visland.userfiles import read_toml_object
 
 __all__ = ["Scenario", "Wind", "BUILTIN_SCENARIOS", "get_scenario", "load_scenario_file",
            "resolve_scenario", "scenario_names", "KNOTS_TO_MPS"]
@@ -236,13 +236,7 @@ def load_scenario_file(path) -> Scenario:
         gust = true
     """
     path = Path(path)
-    try:
-        with path.open("rb") as handle:
-            data = tomllib.load(handle)
-    except FileNotFoundError:
-        raise ValueError(f"{path}: scenario file not found") from None
-    except tomllib.TOMLDecodeError as error:
-        raise ValueError(f"{path}: not valid TOML ({error})") from None
+    data = read_toml_object(path, "scenario file")
     return scenario_from_dict(data, source=str(path))
 
 
