@@ -1,6 +1,6 @@
 """Detection (and the estimates it feeds) on an approach drawn by the independent ray caster.
 
-The frames come from ``tests/detection/raycast_airport.py``: no meshes, no OpenGL, no texture
+The frames come from ``tests/helpers/raycast_airport.py``: no meshes, no OpenGL, no texture
 maps, a painted plan ray-cast pixel by pixel, so nothing of visland's renderer (and nothing
 the detector was tuned on) is in them. The approach is flown by visland's flight model
 (``visland.simulate``); labels are exact (:func:`visland.features.ideal_features`).
@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests" / "detection"))
+sys.path.insert(0, str(HERE.parent))  # the repository root, for tests.helpers.raycast_airport
 
 FT = 0.3048
 
@@ -51,7 +51,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def scene_of(args):
-    from raycast_airport import PaintedAirport
+    from tests.helpers.raycast_airport import PaintedAirport
     joining = []
     for spec in args.joining:
         x, side, angle = (float(a) for a in spec.split(","))
@@ -78,7 +78,7 @@ def _draw(job):
 
 def _draw_new(job):
     scene, camera, p, R, colour, seed, supersample = job
-    from raycast_airport import draw_frame, PaintedAirport
+    from tests.helpers.raycast_airport import draw_frame, PaintedAirport
     grey = draw_frame(scene, camera, p, R, supersample=supersample, blur_sigma_px=0.5,
                       rng=np.random.default_rng(seed))
     if not colour:

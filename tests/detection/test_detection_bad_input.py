@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from detection_frames import frame
+from tests.helpers.detection_frames import frame
 from visland.camera import CameraModel
 from visland.detection import DetectionResult, DetectorParams, detect_runway
 

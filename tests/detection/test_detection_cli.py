@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from detection_frames import frame
+from tests.helpers.detection_frames import frame
 from visland.camera import CameraModel
 from visland.cli import main
 from visland.contracts import read_measurements

@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 import pytest
 
-from detection_frames import colour_frame, edge_error_px, frame
+from tests.helpers.detection_frames import colour_frame, edge_error_px, frame
 from visland.contracts import MEASUREMENT_COLUMNS, read_measurements, write_csv
 from visland.detection import DetectorParams, detect_runway
 

@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from detection_frames import airport_frame, edge_error_px
-from raycast_airport import PaintedAirport
+from tests.helpers.detection_frames import airport_frame, edge_error_px
+from tests.helpers.raycast_airport import PaintedAirport
 from visland.camera import CameraModel
 from visland.detection import DetectionSequence, detect_runway
 from visland.runway import Runway

@@ -5,7 +5,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from estimation_sims import prepared
+from tests.helpers.estimation_sims import prepared
 from visland.estimation.base import Estimate, ObserverParams, Observer, ObserverInput, observer_measurement
 from visland.estimation.points import CCPIHG2P, PointsParams
 

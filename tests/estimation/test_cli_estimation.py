@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from estimation_sims import simulation
+from tests.helpers.estimation_sims import simulation
 from visland.cli import main
 from visland.contracts import ESTIMATE_COLUMNS, read_estimates, read_truth
 from visland.estimation.registry import OBSERVER_NAMES, observer_class, observer_features

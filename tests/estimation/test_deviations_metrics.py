@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from estimation_sims import prepared, simulation, true_height, true_virtual_points
+from tests.helpers.estimation_sims import prepared, simulation, true_height, true_virtual_points
 from visland.estimation.deviations import deviations_from_lines, deviations_from_points
 from visland.estimation.metrics import aggregate_at_100ft, convergence_time_s, error_at_height, run_metrics
 

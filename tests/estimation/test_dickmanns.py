@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from estimation_sims import prepared, simulation
+from tests.helpers.estimation_sims import prepared, simulation
 from visland.camera import CameraModel
 from visland.estimation.dickmanns import (NO_AIRSPEED_NOTE, STATE_NAMES, Dickmanns4D, Dickmanns4DParams,
                                           line_from_normal, predict_air_data, predict_ins_velocity, predict_vision,

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from estimation_sims import prepared, simulation, true_virtual_points
+from tests.helpers.estimation_sims import prepared, simulation, true_virtual_points
 from visland.camera import CameraModel
 from visland.contracts import read_labels
 from visland.estimation.inputs import FeatureSeries, InertialSeries, prepare_inputs

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from estimation_sims import prepared, simulation, true_height
+from tests.helpers.estimation_sims import prepared, simulation, true_height
 from visland.estimation.ecc import EccHG, EccHOSM
 from visland.estimation.kalman import KF2P, KFParams
 from visland.estimation.runner import run_observer

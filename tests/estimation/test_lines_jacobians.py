@@ -7,7 +7,7 @@ hand-derived entries the observers use.
 import numpy as np
 import pytest
 
-from estimation_sims import random_line_inputs
+from tests.helpers.estimation_sims import random_line_inputs
 from visland.estimation.lines import _edge_blocks, _pair_jacobian, ccpi_correction, cccj_increment, cccj_jacobian
 from visland.estimation.lines_model import pair_model
 

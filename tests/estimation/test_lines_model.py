@@ -6,7 +6,7 @@ import pytest
 
 from visland.camera import wrap_line_chart
 from visland.features import line_dynamics_terms
-from estimation_sims import random_line_inputs
+from tests.helpers.estimation_sims import random_line_inputs
 from visland.estimation.lines_model import (align_to, edge_terms, edge_terms_and_jacobian, ii_edge_gradient,
                                             ii_edge_integral, ii_edge_mismatch, measured_pair, pair_model,
                                             pair_observability)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from estimation_sims import prepared, simulation, true_height
+from tests.helpers.estimation_sims import prepared, simulation, true_height
 from visland.estimation.points import (CCPIHG2P, _quaternion_matrix,
                                        output_combination, points_observability, points_phi,
                                        pseudo_inverse_correction)

@@ -1,7 +1,7 @@
 """Inputs from a point tracker (corners only, no d_F) and long measurement gaps."""
 import numpy as np
 
-from estimation_sims import simulation
+from tests.helpers.estimation_sims import simulation
 from visland.estimation.inputs import FeatureSeries, InertialSeries, prepare_inputs
 from visland.estimation.registry import make_observer
 from visland.estimation.runner import run_observer

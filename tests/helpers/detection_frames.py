@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from raycast_airport import PaintedAirport, draw_frame
+from tests.helpers.raycast_airport import PaintedAirport, draw_frame
 from visland.camera import CameraModel
 from visland.features import batch_R_camera_from_runway, ideal_features
 from visland.flight import simulate_flight
