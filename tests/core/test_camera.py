@@ -124,6 +124,7 @@ def test_undistortion_inverts_distortion_and_agrees_with_opencv():
     np.testing.assert_allclose(uv_pinhole, uv_cv[:, 0, :], atol=1e-3)
 
 
+@pytest.mark.slow
 def test_undistortion_maps_straighten_a_distorted_line():
     # A frame through a barrel lens of the half-plane v > 0.05 u + 80 (a straight line in the pinhole
     # image), made by sampling the half-plane at each frame pixel's pinhole position; remapped with

@@ -1,6 +1,5 @@
 """Flight simulation: the issue's approach criteria, the thesis 1.3.2 limits, kinematic consistency."""
 import math
-import time
 
 import numpy as np
 import pytest
@@ -108,10 +107,13 @@ def test_ground_track_includes_the_wind():
     assert trajectory.wind_ned_mps[0].any() == False  # noqa: E712 (calm before the onset)
 
 
-def test_a_100_s_approach_is_simulated_in_well_under_a_second():
+def test_a_100_s_approach_flies_to_the_threshold_crossing():
+    """The long approach of ``visland bench`` and the README (its speed is measured there, not here)."""
     scenario = Scenario("long", -7500.0, 150.0, -20.0, 5.0)
-    start = time.perf_counter()
     trajectory = simulate_flight(scenario)
-    elapsed = time.perf_counter() - start
-    assert trajectory.duration_s > 95.0
-    assert elapsed < 0.8   # the whole `visland simulate` of 100 s must stay under 1 s
+    assert trajectory.end_reason == "threshold" and trajectory.duration_s > 95.0
+    assert len(trajectory.t_s) == round(trajectory.duration_s * 50.0) + 1
+    # one 50 Hz step past the threshold, on the centre line, at the 3 deg glide path's crossing height
+    assert 0.0 <= trajectory.p_runway_m[-1, 0] < trajectory.v_runway_mps[-1, 0] / 50.0
+    assert abs(trajectory.dy_m[-1]) < 0.1
+    assert trajectory.dh_m[-1] == pytest.approx(320.0 * math.tan(math.radians(3.0)), abs=0.5)

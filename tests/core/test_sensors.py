@@ -45,11 +45,16 @@ def test_telemetry_columns_are_in_spec_units(trajectory):
 def test_calibration_error_turns_the_image():
     camera = CameraModel.default(mount_rpy_deg=(0.0, 0.0, 0.0))
     mounted = camera_with_calibration_error(camera, [0.0, 0.0, 0.5])
-    # a point far ahead on the optical axis moves by fx tan(0.5 deg) in u when the camera yaws 0.5 deg
+    # yaw is positive to the right (ZYX mounting, z down): a camera yawed 0.5 deg right sees a point
+    # straight ahead of the body 0.5 deg left of its axis, u decreases by fx tan(0.5 deg)
     p_body = np.array([1e6, 0.0, 0.0])
     uv_nominal, _ = camera.project(camera.R_body_from_camera.T @ p_body)
     uv_mounted, _ = mounted.project(mounted.R_body_from_camera.T @ p_body)
-    assert abs(uv_mounted[0] - uv_nominal[0]) == pytest.approx(camera.fx * math.tan(math.radians(0.5)), rel=1e-3)
+    assert uv_mounted - uv_nominal == pytest.approx([-camera.fx * math.tan(math.radians(0.5)), 0.0], abs=1e-6)
+    # pitch is positive nose up: the same point moves down the image (v grows)
+    pitched = camera_with_calibration_error(camera, [0.0, 0.5, 0.0])
+    uv_pitched, _ = pitched.project(pitched.R_body_from_camera.T @ p_body)
+    assert uv_pitched - uv_nominal == pytest.approx([0.0, camera.fy * math.tan(math.radians(0.5))], abs=1e-6)
     with pytest.raises(ValueError, match="calibration error"):
         camera_with_calibration_error(camera, 45.0)
 

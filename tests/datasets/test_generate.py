@@ -42,6 +42,7 @@ def reference(tmp_path_factory):
     return out, report
 
 
+@pytest.mark.slow
 def test_dataset_holds_the_spec_files_and_checksums(reference):
     out, report = reference
     assert report.rendered == report.n_frames > 10
@@ -65,6 +66,7 @@ def test_dataset_holds_the_spec_files_and_checksums(reference):
     assert names[0] == "000000.png" and names[-1] == f"{report.n_frames - 1:06d}.png"
 
 
+@pytest.mark.slow
 def test_rerun_of_a_complete_dataset_does_nothing(reference):
     out, _ = reference
     before = _tree_digest(out)
@@ -73,6 +75,7 @@ def test_rerun_of_a_complete_dataset_does_nothing(reference):
     assert _tree_digest(out) == before
 
 
+@pytest.mark.slow
 def test_interrupted_run_resumes_to_identical_bytes(reference, tmp_path):
     ref, report = reference
     out = tmp_path / "ds"
@@ -89,6 +92,7 @@ def test_interrupted_run_resumes_to_identical_bytes(reference, tmp_path):
     assert _tree_digest(out) == _tree_digest(ref)
 
 
+@pytest.mark.slow
 def test_full_disk_stops_with_a_clear_message_and_resumes(reference, tmp_path, monkeypatch):
     ref, report = reference
     out = tmp_path / "ds"
@@ -126,6 +130,7 @@ def test_read_only_output_names_the_cause(tmp_path, monkeypatch):
         gen.generate_dataset(_job(), tmp_path / "ds", progress=False)
 
 
+@pytest.mark.slow
 def test_folder_of_another_job_or_foreign_content_is_refused(reference, tmp_path):
     out, _ = reference
     before = _tree_digest(out)
@@ -142,6 +147,7 @@ def test_folder_of_another_job_or_foreign_content_is_refused(reference, tmp_path
     assert (foreign / "holiday.jpg").read_bytes() == b"not ours"
 
 
+@pytest.mark.slow
 def test_another_software_version_is_refused(reference, tmp_path):
     ref, _ = reference
     out = tmp_path / "ds"
@@ -153,6 +159,7 @@ def test_another_software_version_is_refused(reference, tmp_path):
         gen.generate_dataset(_job(lard=True), out, progress=False)
 
 
+@pytest.mark.slow
 def test_two_worker_processes_give_the_same_bytes(reference, tmp_path):
     ref, _ = reference
     out = tmp_path / "ds"
@@ -160,6 +167,7 @@ def test_two_worker_processes_give_the_same_bytes(reference, tmp_path):
     assert _tree_digest(out) == _tree_digest(ref)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):
     from distributed import LocalCluster
     ref, _ = reference
@@ -170,11 +178,13 @@ def test_dask_local_cluster_gives_the_same_bytes(reference, tmp_path):
     assert _tree_digest(out) == _tree_digest(ref)
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_is_one_sentence(tmp_path):
     with pytest.raises(ValueError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
         gen.generate_dataset(_job(), tmp_path / "ds", scheduler="tcp://127.0.0.1:9", progress=False)
 
 
+@pytest.mark.slow
 def test_lard_labels_map_the_corners_and_use_lard_units(reference):
     out, _ = reference
     labels = read_labels(out / "labels.csv")
@@ -215,6 +225,7 @@ def test_out_of_range_arguments_are_one_sentence(argv, message, tmp_path):
     assert not (tmp_path / "ds").exists()
 
 
+@pytest.mark.slow
 def test_cli_generates_a_small_dataset(tmp_path, capsys):
     out = tmp_path / "ds"
     code = _cli(["generate", "--scenario", "thesis-1", "--out", str(out), "--size", "64", "--fps", "1",

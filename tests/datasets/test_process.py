@@ -47,6 +47,7 @@ def _quiet(**kwargs):
     return ProcessOptions(observers=OBSERVERS, quiet=True, **kwargs)
 
 
+@pytest.mark.slow
 def test_ideal_measurements_of_a_simulated_folder(simulated, tmp_path):
     out = tmp_path / "run"
     run = process_input(simulated, out, _quiet(source="ideal"), echo=lambda s: None)
@@ -69,6 +70,7 @@ def test_ideal_measurements_of_a_simulated_folder(simulated, tmp_path):
     assert not re.search(r"""(src|href)=['"]https?:""", html)          # no external resources
 
 
+@pytest.mark.slow
 def test_detection_and_tracking_on_rendered_frames(generated, tmp_path):
     for source in ("detection", "tracking"):
         out = tmp_path / source
@@ -87,6 +89,7 @@ def test_detection_and_tracking_on_rendered_frames(generated, tmp_path):
             assert all(any(p in r for p in ("near_left", "near_right")) for r in measurements["reason"][lost])
 
 
+@pytest.mark.slow
 def test_unusable_frames_are_flagged_and_the_run_goes_on(generated, tmp_path):
     folder = tmp_path / "damaged"
     shutil.copytree(generated, folder)
@@ -102,6 +105,7 @@ def test_unusable_frames_are_flagged_and_the_run_goes_on(generated, tmp_path):
     assert "frame 3" in (tmp_path / "run" / "report.html").read_text()
 
 
+@pytest.mark.slow
 def test_a_video_with_telemetry_beside_it(generated, tmp_path):
     video = tmp_path / "approach.avi"
     writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 5.0, (SIZE, SIZE))
@@ -118,6 +122,7 @@ def test_a_video_with_telemetry_beside_it(generated, tmp_path):
     assert run["n_found"] >= 0.8 * run["n_frames"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage, message", [
     (lambda d: (d / "camera.json").write_text('{"width": 256}'), "camera.json: missing field 'height'"),
     (lambda d: (d / "telemetry.csv").write_text((d / "telemetry.csv").read_text().replace("vd_mps", "vz")),
@@ -143,6 +148,7 @@ def test_a_video_that_cannot_be_opened(tmp_path, capsys):
     assert "broken.mp4: the video cannot be opened" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_compare_builds_the_thesis_tables(simulated, tmp_path, capsys):
     runs = []
     for k, scenario in enumerate(("thesis-1", "thesis-3")):
@@ -164,6 +170,7 @@ def test_compare_builds_the_thesis_tables(simulated, tmp_path, capsys):
     assert (tmp_path / "cmp" / "errors_vs_dx_ideal.png").exists()
 
 
+@pytest.mark.slow
 def test_campaign_resumes_without_redoing_work(tmp_path, capsys):
     scenario = tmp_path / "short.toml"
     scenario.write_text('name = "short"\ndx_m = -1600.0\ndy_m = 20.0\ndgs_m = 0.0\ndpsi_deg = 0.0\ngamma_deg = -3.0\n')
@@ -179,6 +186,7 @@ def test_campaign_resumes_without_redoing_work(tmp_path, capsys):
     assert "holds a campaign with other settings (seed)" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_several_sources_in_one_decoding_pass_match_separate_runs(generated, tmp_path):
     from visland.datasets.process import process_many
     options = _quiet(report=False)
@@ -192,6 +200,7 @@ def test_several_sources_in_one_decoding_pass_match_separate_runs(generated, tmp
     assert set(read_measurements(tmp_path / "t" / "measurements.csv")["source"]) == {"tracking"}
 
 
+@pytest.mark.slow
 def test_a_tracker_policy_is_a_source_of_its_own(generated, tmp_path):
     from visland.datasets.measure import parse_source
     assert parse_source("tracking:every_frame") == ("tracking", "every_frame")

@@ -6,7 +6,7 @@ import pytest
 
 from tests.helpers.detection_frames import frame
 from visland.camera import CameraModel
-from visland.detection import DetectionResult, DetectorParams, detect_runway
+from visland.detection import DetectionResult, detect_runway
 
 SIZE = 512
 CAMERA = CameraModel.default(SIZE)
@@ -48,6 +48,7 @@ def test_smooth_noise_frame():
     assert_not_found(detect_runway(noise, CAMERA, *LEVEL))
 
 
+@pytest.mark.slow
 def test_airport_without_its_runway():
     image, camera, state, _ = frame("thesis-1", 1200.0, size=SIZE, runway=False)
     assert_not_found(detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0])))
@@ -77,6 +78,7 @@ def test_attitudes_that_do_not_allow_a_search(roll, pitch, words):
     assert_not_found(detect_runway(image, camera, roll, pitch), *words)
 
 
+@pytest.mark.slow
 def test_a_previous_result_that_was_not_found_means_acquisition():
     image, camera, state, _ = frame("thesis-8", 600.0, size=SIZE, concrete=True)
     lost = detect_runway(np.zeros_like(image), camera, 0.0, 0.04)
@@ -92,4 +94,3 @@ def test_programming_errors_raise_naming_the_argument():
         detect_runway(image, CAMERA, 0.0, 0.0, params={"min_contrast": 3})
     with pytest.raises(ValueError, match="previous"):
         detect_runway(image, CAMERA, 0.0, 0.0, previous="last frame")
-    assert DetectorParams()    # defaults are valid

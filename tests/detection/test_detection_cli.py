@@ -38,6 +38,7 @@ def folder(tmp_path_factory):
     return root
 
 
+@pytest.mark.slow
 def test_detect_writes_measurements_with_reasons(folder, tmp_path, capsys):
     out = tmp_path / "measurements.csv"
     assert main(["detect", str(folder), "--out", str(out), "--quiet"]) == 0
@@ -56,6 +57,7 @@ def test_detect_writes_measurements_with_reasons(folder, tmp_path, capsys):
     assert main(["detect", str(folder), "--out", str(out), "--quiet", "--force"]) == 0
 
 
+@pytest.mark.slow
 def test_detect_bad_arguments_are_one_line_errors(folder, tmp_path, capsys):
     assert main(["detect", str(tmp_path / "nowhere"), "--out", str(tmp_path / "m.csv")]) == 2
     assert "input folder not found" in capsys.readouterr().err
@@ -65,6 +67,7 @@ def test_detect_bad_arguments_are_one_line_errors(folder, tmp_path, capsys):
     assert "min_contrast" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_bench_detect_ends_with_a_json_line(folder, capsys):
     assert main(["bench", "detect", "--dir", str(folder), "--sequences", "1", "--length", "2", "--repeat", "1"]) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]

@@ -21,6 +21,7 @@ CASES = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, distance, concrete", CASES)
 def test_edges_corners_and_heading_match_the_labels(name, distance, concrete):
     image, camera, state, labels = frame(name, distance, size=SIZE, concrete=concrete)
@@ -36,6 +37,7 @@ def test_edges_corners_and_heading_match_the_labels(name, distance, concrete):
     assert 0.0 < result.confidence <= 1.0
 
 
+@pytest.mark.slow
 def test_tracking_from_the_previous_frame():
     image0, camera, state0, _ = frame("thesis-1", 800.0, size=SIZE)
     image1, _, state1, labels1 = frame("thesis-1", 800.0, frame_offset=1, size=SIZE)
@@ -57,6 +59,7 @@ def test_the_same_detector_serves_every_image_size():
         assert edge_error_px(camera, labels, result, side) < 1.0
 
 
+@pytest.mark.slow
 def test_centre_line_lies_midway():
     image, camera, state, labels = frame("thesis-1", 350.0, size=SIZE)
     result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
@@ -69,9 +72,10 @@ def test_centre_line_lies_midway():
         midpoint = 0.5 * (labels.corners_uv[0, a] + labels.corners_uv[0, b])
         if camera.in_image(midpoint):
             assert abs(camera.line_distance_px(rho, theta, midpoint)) < 1.5
-    assert true_rho == pytest.approx(true_rho)
+    assert abs(rho - true_rho) * camera.fx < 0.5    # in pixels at the image centre; measured 0.02 px
 
 
+@pytest.mark.slow
 def test_measurement_row_round_trips_through_the_contract(tmp_path):
     image, camera, state, _ = frame("thesis-8", 600.0, size=SIZE, concrete=True)
     found = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
@@ -87,6 +91,7 @@ def test_measurement_row_round_trips_through_the_contract(tmp_path):
     assert math.isnan(table["near_left_u_px"][1]) and table["reason"][1] == missing.reason
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, distance", [("thesis-1", 1500.0), ("thesis-1", 800.0), ("thesis-7", 1200.0)])
 def test_colour_places_the_threshold_and_edges_where_grey_levels_cannot(name, distance):
     """Grass with the grey level of the blended stripes: the chroma finds the runway's outline."""

@@ -91,8 +91,14 @@ def test_centre_line_slope_is_the_mean_of_the_edge_slopes(roll, pitch, dpsi, y_m
     b, _ = camera.project(R[0] @ (np.array([3000.0, 0.0, 0.0]) - p[0]))
     _, k_centre = horizon.pencil_from_points(a, b)
     assert k_centre == pytest.approx(0.5 * (k_left + k_right), abs=1e-9)
-    # while the midpoint of the corners is not on it in general (perspective)
-    assert centre_near is not None and centre_far is not None
+    # while the midpoint of the corners is not on it in general (perspective): only when the
+    # threshold is parallel to the image plane (no roll, no heading offset) is it exactly on it
+    along = (b - a) / np.hypot(*(b - a))
+    off_px = [abs(along[0] * (c[1] - a[1]) - along[1] * (c[0] - a[0])) for c in (centre_near, centre_far)]
+    if roll == 0.0 and dpsi == 0.0:
+        assert max(off_px) < 1e-6
+    else:
+        assert off_px[0] > 0.01    # measured 0.019 and 0.027 px at the threshold, 0.002-0.003 px at the far end
 
 
 def test_horizon_outside_the_image():

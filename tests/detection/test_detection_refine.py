@@ -53,7 +53,8 @@ def test_plain_step_is_located_to_a_few_hundredths_of_a_pixel():
     image = area_sampled(80, lambda u, v: np.where(signed_distance(u, v, TRUE_POINT, TRUE_ANGLE) > 0, 150.0, 80.0),
                          noise=1.5, seed=1)
     fit = refine_line(image, start_line(), (-25, 25), "edge", halfwidth_px=6, outward=1, outward_reach_px=1.5)
-    assert fit is not None and fit.support > 0.9
+    assert fit, fit.reason
+    assert fit.support > 0.9
     assert line_error_px(fit.line) < 0.05
     assert fit.residual_px < 0.2
 
@@ -68,7 +69,7 @@ def test_boundary_past_a_painted_side_stripe(stripe_px, tolerance):
     image = area_sampled(80, grey, noise=1.5, seed=2)
     fit = refine_line(image, start_line(offset_px=-1.0), (-25, 25), "edge", halfwidth_px=6, outward=1,
                       outward_reach_px=max(1.5, 1.5 * stripe_px))
-    assert fit is not None
+    assert fit, fit.reason
     assert line_error_px(fit.line) < tolerance
 
 
@@ -80,7 +81,7 @@ def test_stripe_centre(width_px):
     image = area_sampled(80, grey, noise=1.0, seed=3)
     fit = refine_line(image, start_line(offset_px=1.5), (-25, 25), "stripe", polarity=1, halfwidth_px=6 + width_px,
                       stripe_width_px=lambda t: np.full(np.shape(t), width_px + 3.0))
-    assert fit is not None
+    assert fit, fit.reason
     assert line_error_px(fit.line) < 0.1
 
 

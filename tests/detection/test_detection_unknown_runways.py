@@ -23,6 +23,7 @@ def _errors(result, camera, labels):
     return near, max(edge_error_px(camera, labels, result, side) for side in ("left", "right"))
 
 
+@pytest.mark.slow
 def test_a_distorting_non_square_camera_reports_pinhole_features():
     # the runway 18 deg left of the optical axis, where the lens bends lines by pixels
     camera = CameraModel.from_fov(800, 450, 62.0, mount_rpy_deg=(0.0, -6.0, 18.0), distortion=BARREL)
@@ -41,6 +42,7 @@ def test_a_distorting_non_square_camera_reports_pinhole_features():
         assert np.linalg.norm(undistorted_view.corners_uv[:2] - labels.corners_uv[0, :2], axis=1).max() > 1.5
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("distance", [1500.0, 700.0])
 def test_grey_level_threshold_with_haze(distance):
     """No colour: the threshold placed on grey levels (the ground's end, not the stripes' edge)."""

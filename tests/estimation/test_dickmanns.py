@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation
 
 from tests.helpers.estimation_sims import prepared, simulation
 from visland.camera import CameraModel
-from visland.estimation.dickmanns import (NO_AIRSPEED_NOTE, STATE_NAMES, Dickmanns4D, Dickmanns4DParams,
+from visland.estimation.dickmanns import (NO_AIRSPEED_NOTE, STATE_NAMES, Dickmanns4DParams,
                                           line_from_normal, predict_air_data, predict_ins_velocity, predict_vision,
                                           segment_line_covariance, state_derivative, state_jacobian)
 from visland.estimation.inputs import FeatureSeries, InertialSeries, prepare_inputs
@@ -183,6 +183,7 @@ def test_predicted_lines_agree_with_an_independent_projection_on_another_camera(
         assert abs(d_theta) < 1e-6 and abs(d_rho) < 1e-6
 
 
+@pytest.mark.slow
 def test_segment_covariance_matches_monte_carlo():
     rng = np.random.default_rng(16)
     a, b, sigma = np.array([0.05, 0.2]), np.array([0.01, 0.04]), 1e-3
@@ -260,6 +261,7 @@ def _ideal_run(scenario):
     return _run(prepared(scenario), result)[0], _truth(result)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scenario", ["thesis-1", "thesis-7"])
 def test_exact_measurements_converge_to_the_truth(scenario):
     run, truth = _ideal_run(scenario)
@@ -273,6 +275,7 @@ def test_exact_measurements_converge_to_the_truth(scenario):
     assert abs(error_at_height(truth["dh"], run.dh_m, 100 * FT)) < 0.01
 
 
+@pytest.mark.slow
 def test_noisy_measurements_one_pixel():
     result = simulation("thesis-1", pixel_noise_px=1.0)
     run, _ = _run(prepared("thesis-1", pixel_noise_px=1.0), result)
@@ -294,6 +297,7 @@ def _wind_case(airspeed: bool):
     return result, prep
 
 
+@pytest.mark.slow
 def test_wind_from_airspeed_through_the_dickmanns_gust():
     result, prep = _wind_case(airspeed=True)
     run, observer = _run(prep, result)
@@ -311,6 +315,7 @@ def test_wind_from_airspeed_through_the_dickmanns_gust():
     assert np.abs(truth["dy"] - run.dy_m)[run.t_s > gust_t0].max() < 1.0
 
 
+@pytest.mark.slow
 def test_without_airspeed_the_observer_says_so_and_runs():
     result, prep = _wind_case(airspeed=False)
     assert np.isnan(prep.steps[0].tas_mps)
@@ -348,6 +353,7 @@ def _independent_features(result, camera, noise_px, rng):
                          far_uv_px=np.where(inside[:, 2:, None], uv[:, 2:], np.nan))
 
 
+@pytest.mark.slow
 def test_on_measurements_of_another_camera_made_outside_visland():
     """A 1280x720 camera, 60 deg wide, mounted 5 deg down and 1 deg rolled: the pixels come from
     this file's projection with 1 px of noise; d_F from the four corners (visland.estimation.inputs)."""
@@ -390,4 +396,3 @@ def test_predicted_lines_for_the_detector_match_the_next_frame():
     for k, name in enumerate(("left", "right")):
         rho, theta = predicted[name]
         assert abs(theta - measured[k, 1]) < 1e-4 and abs(rho - measured[k, 0]) < 1e-4
-    assert isinstance(observer, Dickmanns4D)

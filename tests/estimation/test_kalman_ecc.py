@@ -48,6 +48,7 @@ def test_kalman_params_are_validated():
         KFParams(image_sigma_rad=0.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cls", [EccHG, EccHOSM])
 def test_ecc_observers_converge_on_ideal_measurements_of_the_ecc_landings(cls):
     for scenario in ("ecc-1", "ecc-2"):

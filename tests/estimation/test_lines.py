@@ -119,6 +119,7 @@ def test_the_five_spec_observers_are_exposed():
 
 
 # --------------------------------------------------------------------------- convergence and accuracy
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ALL)
 def test_converges_on_all_eight_thesis_scenarios(name):
     """Ideal measurements and inertial data: every approach converges within the 5 % band and stays in it."""
@@ -142,6 +143,7 @@ def test_table_5_4_trajectory_1(name):
         assert abs(error_at_height(tr, dh, height)) < 0.006, height
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ALL)
 def test_converges_with_the_recorded_body_rates(name):
     """With the simulator's recorded rates the turn biases every observer (module docstring); still within 5 %."""

@@ -116,7 +116,10 @@ def test_each_observer_converges_on_ideal_measurements(name):
     dh = true_height(result)
     run = run_observer(make_observer(name), prep, 1.2 * dh[0])
     err = np.abs(dh - run.dh_m) / dh
-    assert np.isnan(err[0]) and err[1] == pytest.approx(0.2, rel=1e-6)     # started on the second frame
+    assert np.isnan(err[0]) and np.isfinite(err[1:]).all()     # started on the second frame
+    # within 5 % of the truth for good 5 s after the start (measured: 1.2 s for ii-2p to 3.6 s for ccpi-hg-2p)
+    t_s = result.frames.t_s
+    assert err[t_s >= t_s[1] + 5.0].max() < 0.05
     i100 = int(np.nonzero(dh <= 30.48)[0][0])
     tolerance = {"ii-2p": 1e-2, "ccpi-hosm-2p": 1e-2}.get(name, 1e-3)
     assert abs(dh[i100] - run.dh_m[i100]) < tolerance
@@ -156,6 +159,7 @@ def test_observers_coast_across_missing_frames_and_recover():
     assert not run.coasting[900]
 
 
+@pytest.mark.slow
 def test_one_px_noise_ccpi_error_at_100_ft_within_the_thesis_figures():
     """Thesis Table 5.6: CCPI error at 100 ft, mean 0.10 m and standard deviation 0.05 m over 8 runs.
 

@@ -94,6 +94,7 @@ def _frame_at_height(result, height_m):
     return int(np.nonzero(dh <= height_m)[0][0])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("msaa", [4, 0])
 def test_rendered_runway_corners_match_labels_within_half_a_pixel(flown, msaa):
     result, labels = flown

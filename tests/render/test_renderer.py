@@ -37,6 +37,7 @@ def test_runway_seen_from_6_km_has_no_ground_pixel_inside():
     assert np.all(rgb[cv2.dilate(mask, np.ones((5, 5), np.uint8)) == 0] == 0)
 
 
+@pytest.mark.slow
 def test_same_frame_twice_is_identical_and_noise_follows_the_frame_seed():
     camera = CameraModel.default(128)
     p, R = _pose(3000.0, 160.0, camera)
@@ -64,6 +65,7 @@ def test_bad_input_is_refused():
         renderer.render(p, R)
 
 
+@pytest.mark.slow
 def test_bench_render_prints_its_figures_as_the_last_json_line(capsys):
     from visland.render.bench import run_render_bench
     figures = run_render_bench(size=64, n_frames=3, variants=False, png_levels=(1,))

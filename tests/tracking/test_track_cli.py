@@ -120,6 +120,7 @@ def test_params_file_and_policy_option(folder, tmp_path, capsys):
     assert code == 2 and "template_size_px must be odd" in err
 
 
+@pytest.mark.slow
 def test_bench_track_ends_with_a_json_line(capsys):
     code, stdout, _ = run(["bench", "track", "--size", "256", "--frames", "8", "--repeats", "2",
                            "--distance", "900"], capsys)
