@@ -2,10 +2,14 @@
 
 - ``visland calibrate FOOTAGE --board 9x6 --square-mm 25 --out camera.json``: OpenCV's chessboard
   calibration (:mod:`visland.lens`); or ``--hfov-deg`` for a camera.json from a field of view.
+- ``visland mask FOOTAGE --out mask.png``: proposes the mask of the aircraft's own structure
+  (:mod:`visland.structure_mask`) and a picture to check it.
 """
 from __future__ import annotations
 
 import argparse
+
+import numpy as np
 
 
 def _size(text: str) -> tuple[int, int]:
@@ -92,6 +96,49 @@ def _cmd_calibrate(args) -> int:
     return 0
 
 
+def _cmd_mask(args) -> int:
+    import os
+    from pathlib import Path
+
+    import cv2
+
+    from visland.camera import CameraModel
+    from visland.footage import sample_footage
+    from visland.structure_mask import MaskParams, mask_picture, propose_structure_mask
+    out = Path(args.out)
+    if out.suffix.lower() != ".png":
+        raise ValueError(f"{out}: --out names the mask to write, a .png file")
+    if out.is_dir() or not out.parent.is_dir():
+        raise ValueError(f"{out}: --out must be a .png file in an existing folder")
+    picture = Path(args.picture) if args.picture else out.with_name(out.stem + "-check.png")
+    for path in (out, picture):
+        if path.exists() and not args.force:
+            raise ValueError(f"{path}: output file exists; choose another --out or pass --force to replace it")
+    camera = CameraModel.load(args.camera) if args.camera else None
+    overrides = {name: getattr(args, name) for name in ("max_static_std", "dilate_px") if getattr(args, name) is not None}
+    params = MaskParams(**overrides)
+    if args.samples < 5:
+        raise ValueError(f"--samples must be at least 5 frames, got {args.samples}")
+    frames, total = sample_footage(args.footage, args.samples, colour=True)
+    height, width = frames[0].image.shape[:2]
+    if camera is not None and (camera.width, camera.height) != (width, height):
+        raise ValueError(f"{args.camera}: camera is {camera.width}x{camera.height} but the frames of "
+                         f"{args.footage} are {width}x{height}")
+    greys = [cv2.cvtColor(f.image, cv2.COLOR_RGB2GRAY) for f in frames]
+    result = propose_structure_mask(greys, params, source=str(args.footage))
+    shown = frames[len(frames) // 2]
+    cv2.imwrite(str(out), np.where(result.mask, 255, 0).astype(np.uint8))
+    cv2.imwrite(str(picture), cv2.cvtColor(mask_picture(shown.image, result.mask), cv2.COLOR_RGB2BGR))
+    print(f"{args.footage}: {total} frames, {len(frames)} sampled")
+    print(result.summary())
+    print(f"wrote {out} (white = aircraft structure, ignored) and {picture} ({shown.name} | mask tinted): check it")
+    camera_dir = Path(args.camera).parent if args.camera else out.parent
+    relative = os.path.relpath(out.resolve(), camera_dir.resolve())
+    where = args.camera if args.camera else str(camera_dir / "camera.json")
+    print(f"add to {where}: \"mask\": \"{relative}\"")
+    return 0
+
+
 def register(subparsers):
     """Add the footage helpers' commands to the visland parser."""
     p = subparsers.add_parser(
@@ -120,3 +167,25 @@ def register(subparsers):
     p.add_argument("--size", type=_size, default=None, metavar="WxH", help="frame size for --hfov-deg without footage")
     p.add_argument("--force", action="store_true", help="replace an existing output file")
     p.set_defaults(func=_cmd_calibrate)
+
+    p = subparsers.add_parser(
+        "mask", help="propose a mask of the aircraft's own structure (windshield frame, wiper) from footage",
+        description="Frames sampled evenly over a video or a folder of images: pixels that stay put while the "
+                    "scene moves (low temporal variance) and are dark or next to a static edge are the aircraft's "
+                    "structure; a uniform bright sky, as steady, is not taken. Cleaned up (thin bands removed, "
+                    "parts touching the image border kept, small holes filled, slightly dilated). Writes the mask "
+                    "(PNG, white = structure, the frames' size), a picture frame | frame with the mask tinted to "
+                    "check it, and prints the line to add to camera.json.")
+    p.add_argument("footage", metavar="VIDEO|DIR", help="video, or folder of images (DIR/frames/ if present)")
+    p.add_argument("--out", required=True, metavar="FILE.png", help="mask to write (refused if it exists)")
+    p.add_argument("--picture", metavar="FILE.png", help="check picture (default: OUT with -check before .png)")
+    p.add_argument("--camera", metavar="FILE", help="camera.json the mask goes with (checks the size; the printed "
+                                                     "path is relative to its folder)")
+    p.add_argument("--samples", type=int, default=40, metavar="N",
+                   help="frames sampled evenly over the footage (default 40)")
+    p.add_argument("--max-static-std", type=float, default=None, metavar="GREY",
+                   help="largest temporal standard deviation of a static pixel, grey levels (default 6)")
+    p.add_argument("--dilate-px", type=int, default=None, metavar="PX",
+                   help="final dilation of the mask (default 0.3 %% of the short side, at least 1 px)")
+    p.add_argument("--force", action="store_true", help="replace existing output files")
+    p.set_defaults(func=_cmd_mask)
