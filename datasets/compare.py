@@ -5,9 +5,14 @@ Input: run folders written by ``visland process`` (``run.json``, ``estimates.csv
 observer:
 
 - on scenario 1 (the run whose scenario is ``thesis-1``; else the first run): the 5 %
-  convergence time of dH and the errors ``truth - estimate`` of dH, dY and dX when the true
-  height first falls to 400, 200 and 100 ft;
+  convergence times of dH (the thesis's, sustained until 100 ft, and the stricter one to the end
+  of the run) and the errors ``truth - estimate`` of dH, dY and dX when the true height first
+  falls to 400, 200 and 100 ft;
 - over all runs: the mean and (population) standard deviation of those errors at 100 ft.
+
+Every figure comes from :mod:`visland.estimation.metrics` (the one home of the definitions,
+written under the tables), measured from each observer's start as recorded in the run's
+``metrics.json``, so ``compare`` and ``metrics.json`` agree to the digit.
 
 Writes ``compare.md`` (the tables), ``compare.json`` (every figure), ``compare.csv`` (tidy:
 source, observer, run, quantity, metric, value) and plots into ``--out``, prints the tables,
@@ -17,7 +22,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -25,26 +30,10 @@ import numpy as np
 from visland.contracts import atomic_write_text, json_ready, read_estimates, read_truth, write_csv
 from visland.userfiles import read_json_object
 
-__all__ = ["RunResult", "load_run", "run_figures", "compare_runs", "error_at_height_of", "QUANTITIES"]
+__all__ = ["RunResult", "load_run", "run_figures", "compare_runs", "QUANTITIES"]
 
-FT_TO_M = 0.3048
-HEIGHTS_FT = (400.0, 200.0, 100.0)
 #: (estimate column, truth column, label)
 QUANTITIES = (("dh_m", "dh_m", "dH"), ("dy_m", "dy_m", "dY"), ("dx_m", "dx_m", "dX"))
-
-
-def error_at_height_of(dh_true_m, q_true, q_est, height_m: float) -> float:
-    """``q_true - q_est`` when the true height first falls to ``height_m`` (linear interpolation)."""
-    dh = np.asarray(dh_true_m, dtype=float)
-    error = np.asarray(q_true, dtype=float) - np.asarray(q_est, dtype=float)
-    below = np.nonzero(dh <= height_m)[0]
-    if below.size == 0:
-        return math.nan
-    i = int(below[0])
-    if i == 0:
-        return float(error[0])
-    w = (dh[i - 1] - height_m) / (dh[i - 1] - dh[i]) if dh[i - 1] != dh[i] else 1.0
-    return float((1.0 - w) * error[i - 1] + w * error[i])
 
 
 @dataclass
@@ -56,6 +45,7 @@ class RunResult:
     scenario: str
     truth: dict
     series: dict           # observer -> dict of arrays (t_s, dh_m, dy_m, dx_m)
+    start_t_s: dict = field(default_factory=dict)   # observer -> its start (metrics.json); absent: first estimate
 
 
 def load_run(path) -> RunResult:
@@ -80,26 +70,57 @@ def load_run(path) -> RunResult:
             raise ValueError(f"{path / 'estimates.csv'}: observer {observer} has {len(data['t_s'])} rows whose times "
                              f"do not match the {truth.n_rows} frames of truth.csv")
         series[observer] = data
-    return RunResult(path, str(info.get("source", "?")), str(info.get("scenario") or path.name), dict(truth), series)
+    return RunResult(path, str(info.get("source", "?")), str(info.get("scenario") or path.name), dict(truth), series,
+                     _observer_starts(path / "metrics.json"))
+
+
+def _observer_starts(metrics_path: Path) -> dict:
+    """``{observer: start_t_s}`` from a run's metrics.json (empty if the file or the entries are absent)."""
+    if not metrics_path.exists():
+        return {}
+    try:
+        doc = json.loads(metrics_path.read_text())
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{metrics_path}: not valid JSON ({error.msg})") from None
+    observers = doc.get("observers", {}) if isinstance(doc, dict) else None
+    if not isinstance(observers, dict):
+        raise ValueError(f"{metrics_path}: 'observers' must map each observer to its metrics "
+                         f"(is it a metrics.json written by 'visland estimate'?)")
+    starts = {}
+    for observer, values in observers.items():
+        start = values.get("start_t_s") if isinstance(values, dict) else None
+        if start is not None:
+            if not isinstance(start, (int, float)) or not math.isfinite(start):
+                raise ValueError(f"{metrics_path}: observer {observer}: start_t_s is {start!r} (a finite number of "
+                                 f"seconds is required)")
+            starts[observer] = float(start)
+    return starts
 
 
 def run_figures(run: RunResult) -> dict:
-    """``{observer: {"dH": {conv_time_5pct_s, err_400ft_m, ...}, "dY": {...}, "dX": {...}}}``."""
-    from visland.estimation.metrics import convergence_time_s
+    """``{observer: {"dH": {conv_time_5pct_s, conv_time_5pct_to_end_s, err_400ft_m, ...}, "dY": {...},
+    "dX": {...}}}``, by :mod:`visland.estimation.metrics`."""
+    from visland.estimation.metrics import convergence_time_s, errors_at_heights
     out = {}
-    dh_true = run.truth["dh_m"]
+    t_s, dh_true = run.truth["t_s"], run.truth["dh_m"]
     for observer, data in run.series.items():
+        start = run.start_t_s.get(observer)
         figures = {}
         for est_col, truth_col, label in QUANTITIES:
             values = {}
             if label == "dH":
-                values["conv_time_5pct_s"] = convergence_time_s(run.truth["t_s"], dh_true, data["dh_m"])
-            for h in HEIGHTS_FT:
-                values[f"err_{h:.0f}ft_m"] = error_at_height_of(dh_true, run.truth[truth_col], data[est_col],
-                                                                h * FT_TO_M)
+                values["conv_time_5pct_s"] = convergence_time_s(t_s, dh_true, data["dh_m"], start_t_s=start)
+                values["conv_time_5pct_to_end_s"] = convergence_time_s(t_s, dh_true, data["dh_m"], start_t_s=start,
+                                                                       until_height_m=None)
+            values.update(errors_at_heights(dh_true, run.truth[truth_col], data[est_col]))
             figures[label] = values
         out[observer] = figures
     return out
+
+
+#: The convergence rows of the dH table: (metric key, row label). The thesis's first (its tables' name).
+CONVERGENCE_ROWS = (("conv_time_5pct_s", "5 % convergence time (s)"),
+                    ("conv_time_5pct_to_end_s", "5 % convergence time to the end of the run (s)"))
 
 
 def _fmt(value, digits=3):
@@ -108,6 +129,7 @@ def _fmt(value, digits=3):
 
 def compare_runs(run_paths, out_dir, echo=print) -> dict:
     """Build the comparison of ``run_paths`` into ``out_dir``; return its figures."""
+    from visland.estimation.metrics import METRIC_DEFINITIONS, METRIC_HEIGHTS_FT, aggregate_at_100ft
     runs = [load_run(p) for p in run_paths]
     if not runs:
         raise ValueError("give at least one run folder")
@@ -135,18 +157,18 @@ def compare_runs(run_paths, out_dir, echo=print) -> dict:
             header = ["metric"] + observers
             rows = []
             if quantity == "dH":
-                rows.append([f"5 % convergence time (s), {reference[0].scenario}"]
-                            + [reference[1].get(o, {}).get("dH", {}).get("conv_time_5pct_s") for o in observers])
-            for h in HEIGHTS_FT:
+                for key, label in CONVERGENCE_ROWS:
+                    rows.append([f"{label}, {reference[0].scenario}"]
+                                + [reference[1].get(o, {}).get("dH", {}).get(key) for o in observers])
+            for h in METRIC_HEIGHTS_FT:
                 rows.append([f"error at {h:.0f} ft (m), {reference[0].scenario}"]
                             + [reference[1].get(o, {}).get(quantity, {}).get(f"err_{h:.0f}ft_m") for o in observers])
             means, stds, counts = [], [], []
             for o in observers:
-                errors = np.array([f[o][quantity]["err_100ft_m"] for _, f in mine if o in f], dtype=float)
-                finite = errors[np.isfinite(errors)]
-                means.append(float(np.mean(finite)) if finite.size else math.nan)
-                stds.append(float(np.std(finite)) if finite.size else math.nan)
-                counts.append(int(finite.size))
+                agg = aggregate_at_100ft(f[o][quantity]["err_100ft_m"] for _, f in mine if o in f)
+                means.append(agg["mean_err_100ft_m"])
+                stds.append(agg["std_err_100ft_m"])
+                counts.append(agg["n_runs"])
             rows.append([f"mean error at 100 ft (m), {len(mine)} runs"] + means)
             rows.append([f"standard deviation at 100 ft (m), {len(mine)} runs"] + stds)
             md.append(f"## {quantity}: {source}")
@@ -159,6 +181,12 @@ def compare_runs(run_paths, out_dir, echo=print) -> dict:
             summary[source][quantity] = {o: {"mean_err_100ft_m": m, "std_err_100ft_m": s, "n_runs": c,
                                              **reference[1].get(o, {}).get(quantity, {})}
                                          for o, m, s, c in zip(observers, means, stds, counts)}
+    md.append("Definitions (visland.estimation.metrics; errors are truth - estimate; '-': none):")
+    md.append("")
+    for key, label in CONVERGENCE_ROWS:
+        md.append(f"- {label}: {METRIC_DEFINITIONS[key]}.")
+    md.append("- error at h ft: " + METRIC_DEFINITIONS["err_<h>ft_m"].replace("dH - dH_hat", "truth - estimate")
+              + "; mean and standard deviation (population) of the 100 ft errors over the runs that have one.")
     text = "\n".join(md) + "\n"
     atomic_write_text(out_dir / "compare.md", text)
     atomic_write_text(out_dir / "compare.json", json.dumps(json_ready(summary), indent=2) + "\n")

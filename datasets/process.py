@@ -33,7 +33,6 @@ __all__ = ["ProcessOptions", "process_input", "process_many", "DEFAULT_OBSERVERS
 #: Every observer of the seeds (SPEC names).
 DEFAULT_OBSERVERS = ("oj-2p", "ii-2p", "cccs-2p", "ccpi-hg-2p", "ccpi-hosm-2p", "cccj-2p", "kf-2p",
                      "oj-2l", "ii-2l", "ccpi-2l", "cccj-2l", "ekf-2l", "ecc-hg", "ecc-hosm")
-FT_TO_M = 0.3048
 
 
 @dataclass(frozen=True)
@@ -80,18 +79,17 @@ def _scenario_of(source) -> str | None:
 
 
 def _deviation_errors(truth, estimates_path: Path) -> dict:
-    """dY and dX errors (truth - estimate) at 400/200/100 ft per observer."""
+    """dY and dX errors (truth - estimate) at 400/200/100 ft per observer (``dY_err_400ft_m``, ...)."""
     from visland.contracts import read_estimates
-    from visland.datasets.compare import error_at_height_of
+    from visland.estimation.metrics import errors_at_heights
     estimates = read_estimates(estimates_path)
     out = {}
     for observer in dict.fromkeys(estimates["observer"]):
         keep = estimates["observer"] == observer
         entry = {}
         for column, label in (("dy_m", "dY"), ("dx_m", "dX")):
-            for h in (400.0, 200.0, 100.0):
-                entry[f"{label}_err_{h:.0f}ft_m"] = error_at_height_of(truth["dh_m"], truth[column],
-                                                                      estimates[column][keep], h * FT_TO_M)
+            errors = errors_at_heights(truth["dh_m"], truth[column], estimates[column][keep])
+            entry.update({f"{label}_{key}": value for key, value in errors.items()})
         out[observer] = entry
     return out
 
@@ -197,9 +195,11 @@ def _write_report(folder: Path, source, measurements, metrics, deviations, run) 
     estimates = read_estimates(folder / "estimates.csv")
     columns = {k: np.asarray(v) if k in ("source", "reason") else np.asarray(v, dtype=float)
                for k, v in measurements.columns.items()}
+    from visland.estimation.metrics import METRIC_DEFINITIONS
     merged = {}
     for observer, values in (metrics or {}).items():
-        merged[observer] = {"conv. 5 % (s)": values.get("conv_time_5pct_s")}
+        merged[observer] = {"conv. 5 % to 100 ft (s)": values.get("conv_time_5pct_s"),
+                            "conv. 5 % to the end (s)": values.get("conv_time_5pct_to_end_s")}
         merged[observer].update({f"dH @ {h} ft (m)": values.get(f"err_{h}ft_m") for h in (400, 200, 100)})
         merged[observer].update({f"{q} @ 100 ft (m)": deviations.get(observer, {}).get(f"{q}_err_100ft_m")
                                  for q in ("dY", "dX")})
@@ -217,7 +217,10 @@ def _write_report(folder: Path, source, measurements, metrics, deviations, run) 
                  summary_rows=summary, measurements=columns, estimates=dict(estimates),
                  truth=dict(source.truth) if source.truth is not None else None,
                  labels=dict(source.labels) if source.labels is not None else None, camera=source.camera,
-                 metrics=merged or None, flagged=measurements.flagged)
+                 metrics=merged or None, flagged=measurements.flagged,
+                 metric_notes=[f"conv. 5 % to 100 ft: {METRIC_DEFINITIONS['conv_time_5pct_s']}.",
+                               f"conv. 5 % to the end: {METRIC_DEFINITIONS['conv_time_5pct_to_end_s']}.",
+                               f"dH @ h ft: {METRIC_DEFINITIONS['err_<h>ft_m']}; dY and dX likewise."])
 
 
 def _print_summary(run, metrics, deviations, out_dir, echo, report: bool = True) -> None:

@@ -222,7 +222,7 @@ def _plot_pixel_errors(t, errors):
 
 def write_report(path, *, title: str, summary_rows: list[tuple[str, str]], measurements, estimates,
                  truth=None, labels=None, camera=None, metrics: dict | None = None,
-                 flagged: list[tuple[int, str]] | None = None) -> None:
+                 flagged: list[tuple[int, str]] | None = None, metric_notes: list[str] | None = None) -> None:
     """Write the HTML report.
 
     Parameters
@@ -236,6 +236,7 @@ def write_report(path, *, title: str, summary_rows: list[tuple[str, str]], measu
     camera : :class:`visland.camera.CameraModel`, used for line errors in pixels.
     metrics : ``{observer: {metric: value}}``.
     flagged : ``[(frame, reason)]`` of frames that could not be used.
+    metric_notes : sentences defining the metrics, listed under their table.
     """
     import matplotlib
     matplotlib.use("Agg")
@@ -254,6 +255,8 @@ def write_report(path, *, title: str, summary_rows: list[tuple[str, str]], measu
         names = list(dict.fromkeys(m for values in metrics.values() for m in values))
         parts.append("<h2>Metrics (truth - estimate)</h2>")
         parts.append(_table(["observer"] + names, [[obs] + [metrics[obs].get(m) for m in names] for obs in metrics]))
+        if metric_notes:
+            parts.append("<ul class='meta'>" + "".join(f"<li>{html.escape(n)}</li>" for n in metric_notes) + "</ul>")
     parts.append("<h2>Estimates against truth</h2>")
     parts.append(f"<img src='{_plots_estimates(estimates, truth, observers)}' alt='estimates'>")
     parts.append("<h2>Observability</h2>")

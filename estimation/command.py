@@ -108,7 +108,7 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
     """
     from visland.contracts import ESTIMATE_COLUMNS, atomic_write_text, write_csv
     from visland.estimation.inputs import prepare_inputs
-    from visland.estimation.metrics import run_metrics
+    from visland.estimation.metrics import METRIC_DEFINITIONS, run_metrics
     from visland.estimation.runner import run_observer
 
     folder = Path(folder)
@@ -172,14 +172,16 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
             if run.notes:
                 m["notes"] = list(run.notes)
             metrics[name] = m
-            line += (f"; conv 5% {m['conv_time_5pct_s']:.2f} s, dH err 400/200/100 ft "
+            line += (f"; conv 5% {m['conv_time_5pct_s']:.2f} s (to 100 ft), dH err 400/200/100 ft "
                      f"{m['err_400ft_m']:+.3f}/{m['err_200ft_m']:+.3f}/{m['err_100ft_m']:+.3f} m")
         echo(line)
     write_csv(out_path, columns, ESTIMATE_COLUMNS + ESTIMATE_EXTRA_COLUMNS)
     echo(f"wrote {out_path} ({len(columns['observer'])} rows)")
     if metrics:
         metrics_path = out_path.parent / "metrics.json"
-        doc = {"definitions": "visland.estimation.metrics (thesis 5.2.1): errors are dH - dH_hat in metres",
+        doc = {"definitions": {"source": "visland.estimation.metrics (thesis 5.2.1): errors are dH - dH_hat in "
+                                         "metres; NaN (null) where a metric has no value",
+                               **METRIC_DEFINITIONS},
                "measurements": _path_from(meas_path, metrics_path.parent), "observers": json_ready(metrics)}
         atomic_write_text(metrics_path, json.dumps(doc, indent=2) + "\n")
         echo(f"wrote {metrics_path}")
