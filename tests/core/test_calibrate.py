@@ -10,7 +10,7 @@ import pytest
 from visland.camera import CameraModel
 from visland.cli import main
 
-from chessboard_views import TRUE_DISTORTION, TRUE_K, TRUE_SIZE, render_views
+from tests.helpers.chessboard_views import TRUE_DISTORTION, TRUE_K, TRUE_SIZE, render_views
 
 
 @pytest.fixture(scope="module")

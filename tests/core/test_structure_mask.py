@@ -6,7 +6,7 @@ import pytest
 from visland.cli import main
 from visland.structure_mask import MaskParams, propose_structure_mask
 
-from cockpit_frames import HORIZON_V, SIZE, cockpit_frames
+from tests.helpers.cockpit_frames import HORIZON_V, SIZE, cockpit_frames
 
 
 @pytest.fixture(scope="module")
