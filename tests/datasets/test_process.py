@@ -14,7 +14,7 @@ import pytest
 
 from visland.camera import CameraModel
 from visland.cli import main
-from visland.contracts import (ESTIMATE_COLUMNS, MEASUREMENT_COLUMNS, read_estimates, read_measurements,
+from visland.contracts import (ESTIMATE_COLUMNS, MEASUREMENT_COLUMNS, read_estimates, read_labels, read_measurements,
                                read_truth)
 from visland.datasets import generate as gen
 from visland.datasets.process import ProcessOptions, process_input
@@ -70,23 +70,94 @@ def test_ideal_measurements_of_a_simulated_folder(simulated, tmp_path):
     assert not re.search(r"""(src|href)=['"]https?:""", html)          # no external resources
 
 
+def _corner_error_px(measurements, labels, corners):
+    """Per frame, the worst of ``corners``' pixel distances between measurement and label (NaN if not measured)."""
+    errors = [np.hypot(measurements[f"{c}_u_px"] - labels[f"{c}_u_px"], measurements[f"{c}_v_px"] - labels[f"{c}_v_px"])
+              for c in corners]
+    return np.fmax.reduce(errors)
+
+
+def _edge_error_px(measurements, labels, camera, side):
+    """Per frame, the largest distance in pixels from the labelled visible corners of one edge to the measured line."""
+    distances = []
+    for corner in (f"near_{side}", f"far_{side}"):
+        uv = np.stack([labels[f"{corner}_u_px"], labels[f"{corner}_v_px"]], axis=-1)
+        d = np.abs(camera.line_distance_px(measurements[f"{side}_rho"], measurements[f"{side}_theta_rad"], uv))
+        distances.append(np.where(labels[f"{corner}_visible"] == 1, d, np.nan))
+    return np.fmax(*distances)
+
+
 @pytest.mark.slow
-def test_detection_and_tracking_on_rendered_frames(generated, tmp_path):
-    for source in ("detection", "tracking"):
-        out = tmp_path / source
-        run = process_input(generated, out, _quiet(source=source), echo=lambda s: None)
-        measurements = read_measurements(out / "measurements.csv")
-        assert run["n_frames"] == measurements.n_rows == len(list((generated / "frames").iterdir()))
-        assert set(measurements["source"]) == {source}
+def test_rendered_approach_measured_and_estimated_against_labels_and_truth(generated, tmp_path):
+    """End to end on rendered frames: detection, tracking and anchored tracking against labels.csv,
+    their estimates against truth.csv.
+
+    The tolerances sit a little above what was measured when the test was written (in the
+    comments: 104 frames of 512x512 at 5 Hz from 1480 m before the threshold to the threshold),
+    so a regression of the README's figures' kind (pixel errors per band, dH at 100 ft) fails here.
+    """
+    from visland.datasets.process import process_many
+    out = {source: tmp_path / source for source in ("detection", "tracking", "anchored")}
+    runs = process_many(generated, out, _quiet(report=False), echo=lambda s: None)
+    labels = read_labels(generated / "labels.csv")
+    camera = CameraModel.default(SIZE)
+    n = labels.n_rows
+    near_visible = (labels["near_left_visible"] == 1) & (labels["near_right_visible"] == 1)
+    far_visible = (labels["far_left_visible"] == 1) & (labels["far_right_visible"] == 1)
+    assert n == 104 and near_visible.sum() == 100 and far_visible.all()
+    before_500m = np.arange(n) < 69            # the first two thirds: 1480 to 500 m before the threshold
+    measured = {}
+    for source, run in runs.items():
+        m = measured[source] = read_measurements(out[source] / "measurements.csv")
+        assert run["n_frames"] == m.n_rows == n == len(list((generated / "frames").iterdir()))
+        # an anchored run's row says "tracking" where no detection anchored it
+        assert set(m["source"]) == ({"anchored", "tracking"} if source == "anchored" else {source})
         assert run["throughput"]["fps_analysis_only"] > 0
-        if source == "detection":
-            assert run["n_found"] >= 0.8 * run["n_frames"]
-        else:
-            # a tracker is built for 25 Hz; at 5 Hz it holds the corners for the first seconds (its own
-            # tests measure its accuracy), and every frame without the corners says which point and why
-            assert measurements["found"][:10].all()
-            lost = measurements["found"] == 0
-            assert all(any(p in r for p in ("near_left", "near_right")) for r in measurements["reason"][lost])
+
+    # detection: found in every frame; corners, edges and heading against the labels
+    m = measured["detection"]
+    assert m["found"].all()
+    near = _corner_error_px(m, labels, ("near_left", "near_right"))[near_visible]
+    assert np.isfinite(near).sum() >= 70                        # measured 73 of 100 (others withheld)
+    assert np.nanmedian(near) < 0.25                             # measured 0.19 px
+    assert np.nanpercentile(near, 95) < 1.2                      # measured 0.92 px
+    assert np.nanmax(_corner_error_px(m, labels, ("near_left", "near_right"))[before_500m]) < 3.0   # measured 2.59
+    # measured: one gross error, frame 99 (near corners at the image's border, found 20 px short)
+    assert np.sum(near > 3.0) <= 1
+    far = _corner_error_px(m, labels, ("far_left", "far_right"))
+    assert np.nanmedian(far) < 0.6 and np.nanmax(far) < 2.5     # measured 0.46 / 2.17 px
+    for side in ("left", "right"):
+        edge = _edge_error_px(m, labels, camera, side)
+        assert np.isfinite(edge).all()
+        assert np.percentile(edge, 95) < 0.6 and edge.max() < 1.5   # measured p95 0.30 / 0.47, max 0.58 / 1.17 px
+    dpsi = np.abs(m["dpsi_deg"] - labels["dpsi_deg"])
+    assert np.median(dpsi) < 0.01 and dpsi.max() < 0.12          # measured 0.006 / 0.097 deg
+
+    # tracking (built for 25 Hz, here 5 Hz): drifts, holds the corners to 500 m; every frame without
+    # them says which point and why
+    m = measured["tracking"]
+    assert m["found"][:10].all() and m["found"].sum() >= 93       # measured 95 of 104
+    near = _corner_error_px(m, labels, ("near_left", "near_right"))
+    assert np.nanmax(near[:34]) < 1.6 and np.nanmax(near[before_500m]) < 3.2   # measured 1.29 / 2.52 px
+    lost = m["found"] == 0
+    assert all(any(p in r for p in ("near_left", "near_right")) for r in m["reason"][lost])
+
+    # anchored tracking: detection keeps the tracker on the corners
+    m = measured["anchored"]
+    assert m["found"].sum() >= 98                                 # measured 100 of 104
+    near = _corner_error_px(m, labels, ("near_left", "near_right"))
+    assert np.nanmedian(near[near_visible]) < 0.4                  # measured 0.30 px
+    assert np.nanmax(near[before_500m]) < 1.7                      # measured 1.34 px
+
+    # estimates against the truth (observers start 20 % above the true height, 90 m at the start);
+    # measured at 100 ft: dH ccpi-hg-2p -0.13 (detection) / -0.90 (anchored), cccj-2l 0.91 / 0.81,
+    # ecc-hg -1.52 / -1.41 m; dY ccpi-hg-2p 0.002 / 0.061 m
+    limits_dh_m = {"ccpi-hg-2p": (0.3, 1.2), "cccj-2l": (1.2, 1.1), "ecc-hg": (2.0, 1.9)}
+    for k, source in enumerate(("detection", "anchored")):
+        metrics = json.loads((out[source] / "metrics.json").read_text())
+        for name, limits in limits_dh_m.items():
+            assert abs(metrics["observers"][name]["err_100ft_m"]) < limits[k], (source, name)
+        assert abs(metrics["deviations"]["ccpi-hg-2p"]["dY_err_100ft_m"]) < (0.03, 0.1)[k]
 
 
 @pytest.mark.slow
