@@ -34,10 +34,8 @@ from __future__ import annotations
 import errno
 import hashlib
 import json
-import math
 import os
 import shutil
-import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -48,6 +46,7 @@ import numpy as np
 from visland import __version__
 from visland.contracts import FRAMES_COLUMNS, atomic_write_bytes, atomic_write_text, write_csv
 from visland.features import batch_R_camera_from_runway
+from visland.progress import progress_bar
 from visland.render.params import SceneParams
 from visland.scenarios import Scenario
 from visland.simulate import FORMAT_VERSION, SimulationOptions, SimulationResult, run_simulation, write_simulation_files
@@ -246,48 +245,6 @@ def _disk_error(out: Path, what: str, error: OSError) -> ValueError:
                       "running the same command again resumes from them")
 
 
-class _Progress:
-    """A one-line progress bar on stderr (rewritten in place on a terminal, every 10 % otherwise)."""
-
-    def __init__(self, total: int, done: int, stream=None, enabled: bool = True):
-        self.total, self.done, self.start_done = total, done, done
-        self.stream = stream or sys.stderr
-        self.enabled = enabled
-        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
-        self.t0 = time.perf_counter()
-        self.last = 0.0
-        self.last_decile = -1
-
-    def update(self, n: int = 1) -> None:
-        self.done += n
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        decile = int(10 * self.done / max(self.total, 1))
-        if self.tty and (now - self.last > 0.25 or self.done == self.total):
-            self.last = now
-            self.stream.write("\r" + self._line(now))
-            self.stream.flush()
-        elif not self.tty and decile != self.last_decile:
-            self.last_decile = decile
-            self.stream.write(self._line(now) + "\n")
-            self.stream.flush()
-
-    def _line(self, now: float) -> str:
-        width = 30
-        fraction = self.done / max(self.total, 1)
-        bar = "#" * int(width * fraction) + "-" * (width - int(width * fraction))
-        rate = (self.done - self.start_done) / max(now - self.t0, 1e-9)
-        remaining = (self.total - self.done) / rate if rate > 0 else math.inf
-        eta = f"{int(remaining // 60)}m{int(remaining % 60):02d}s" if math.isfinite(remaining) else "--"
-        return f"frames [{bar}] {self.done}/{self.total} {100 * fraction:5.1f}%  {rate:5.2f} frames/s  ETA {eta}"
-
-    def close(self) -> None:
-        if self.enabled and self.tty:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
 # --------------------------------------------------------------------------- the job
 def generate_dataset(job: GenerateJob, out_dir, workers: int = 1, scheduler: str | None = None,
                      force: bool = False, progress: bool = True, result: SimulationResult | None = None
@@ -301,7 +258,7 @@ def generate_dataset(job: GenerateJob, out_dir, workers: int = 1, scheduler: str
     workers : local worker processes, 1-64 (1 renders in this process); ignored with ``scheduler``.
     scheduler : address of a Dask distributed scheduler (e.g. ``tcp://127.0.0.1:8786``).
     force : replace whatever ``out_dir`` holds.
-    progress : draw a progress bar on stderr.
+    progress : draw a progress bar on stderr (on a terminal only, see :mod:`visland.progress`).
     result : a simulation already run for ``job`` (saves running it again).
     """
     if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= MAX_WORKERS:
@@ -352,7 +309,7 @@ def generate_dataset(job: GenerateJob, out_dir, workers: int = 1, scheduler: str
     if tasks and not scheduler:
         from visland.render.glview import check_opengl
         check_opengl()          # one clear sentence here rather than in every worker
-    bar = _Progress(n, reused, enabled=progress)
+    bar = progress_bar(n, "render", initial=reused, enabled=progress)
 
     def write(index: int, data: bytes) -> None:
         try:

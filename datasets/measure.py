@@ -8,7 +8,6 @@ thread, and returns the ``measurements.csv`` columns (SPEC labels schema plus ``
 from __future__ import annotations
 
 import queue
-import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -17,6 +16,7 @@ import numpy as np
 
 from visland.contracts import LABEL_COLUMNS, MEASUREMENT_COLUMNS
 from visland.folder import as_grey
+from visland.progress import progress_bar
 
 __all__ = ["Measurements", "measure", "measure_many", "parse_source", "SOURCES"]
 
@@ -78,18 +78,6 @@ class _Rows:
         return {c: [row[c] for row in self.rows] for c in MEASUREMENT_COLUMNS}
 
 
-def _progress(done: int, total: int, start: float, label: str) -> None:
-    if not sys.stderr.isatty() and done not in (total,) and done % 200:
-        return
-    elapsed = time.perf_counter() - start
-    rate = done / elapsed if elapsed > 0 else 0.0
-    width = 30
-    filled = int(width * done / max(total, 1))
-    end = "\n" if done == total else "\r"
-    print(f"{label} [{'#' * filled}{'.' * (width - filled)}] {done}/{total} frames, {rate:5.1f} fps",
-          end=end, file=sys.stderr, flush=True)
-
-
 def _measure_ideal(source) -> Measurements:
     if source.labels is None:
         raise ValueError(f"{source.name}: --source ideal needs labels.csv in the input folder")
@@ -111,18 +99,19 @@ def _measure_detection(source, params, quiet) -> Measurements:
     flagged = []
     analysis = 0.0
     start = time.perf_counter()
-    for index, image, reason in source.frames(gray=False):        # colour: the chroma places the threshold
-        t = float(source.times_s[index])
-        if image is None:
-            rows.add(index, t, None, False, reason, 0.0)
-            flagged.append((index, reason))
-        else:
-            tic = time.perf_counter()
-            result = sequence(image, float(source.inertial.roll_rad[index]), float(source.inertial.pitch_rad[index]), t)
-            analysis += time.perf_counter() - tic
-            rows.add(index, t, result.to_measurement_row(), result.found, result.reason, result.confidence)
-        if not quiet:
-            _progress(index + 1, len(source), start, "detect")
+    with progress_bar(len(source), "detect", enabled=not quiet) as bar:
+        for index, image, reason in source.frames(gray=False):        # colour: the chroma places the threshold
+            t = float(source.times_s[index])
+            if image is None:
+                rows.add(index, t, None, False, reason, 0.0)
+                flagged.append((index, reason))
+            else:
+                tic = time.perf_counter()
+                result = sequence(image, float(source.inertial.roll_rad[index]),
+                                  float(source.inertial.pitch_rad[index]), t)
+                analysis += time.perf_counter() - tic
+                rows.add(index, t, result.to_measurement_row(), result.found, result.reason, result.confidence)
+            bar.update()
     return Measurements("detection", rows.columns(), flagged, analysis, time.perf_counter() - start)
 
 
@@ -131,8 +120,9 @@ def _measure_tracking(source, kind, init, quiet) -> Measurements:
     base, policy = parse_source(kind)
     params = TrackerParams(update_policy=policy) if policy else None
     start = time.perf_counter()
-    result = track_source(source, anchor=base == "anchored", init=init, params=params,
-                          progress=None if quiet else (lambda done, total: _progress(done, total, start, "track")))
+    with progress_bar(len(source), "track", enabled=not quiet) as bar:
+        result = track_source(source, anchor=base == "anchored", init=init, params=params,
+                              progress=lambda done, total: bar.update(done - bar.n))
     return Measurements(kind, result.columns, result.flagged, result.analysis_s, time.perf_counter() - start)
 
 
