@@ -41,7 +41,8 @@ def _cmd_estimate(args) -> int:
                          "--out folder or pass --force to replace it")
     options = EstimateOptions(observers=_expand_observers(args.observer), measurements=args.measurements,
                               initial_height_m=args.initial_height, initial_error=args.initial_error,
-                              aim_distance_m=args.aim_distance, params_file=args.params)
+                              aim_distance_m=args.aim_distance, params_file=args.params,
+                              self_calibration="apply" if args.self_calibration else "check")
     estimate_folder(args.dir, options, args.out)
     return 0
 
@@ -85,6 +86,12 @@ def register(subparsers):
     p.add_argument("--params", default=None, metavar="FILE",
                    help="observer parameters, TOML or JSON, one table per observer name")
     p.add_argument("--force", action="store_true", help="replace an existing FILE (and metrics.json beside it)")
+    p.add_argument("--self-calibration", action="store_true",
+                   help="correct the camera's mounting (pitch, roll, yaw) with its estimate from the runway itself "
+                        "(vanishing point and threshold on the inertial horizon, epipolar constraint of the "
+                        "threshold corners); the observers start once it has settled. Without it the estimate "
+                        "is only reported (run log, metrics.json), and a calibration problem (mounting degrees off) "
+                        "is always reported")
     p.set_defaults(func=_cmd_estimate)
 
     p = subparsers.add_parser(

@@ -40,8 +40,11 @@ class EstimateOptions:
     initial_error: float = 0.2
     aim_distance_m: float = DEFAULT_AIM_DISTANCE_M
     params_file: str | None = None
+    self_calibration: str = "check"
 
     def __post_init__(self):
+        if self.self_calibration not in ("off", "check", "apply"):
+            raise ValueError(f"self_calibration must be 'off', 'check' or 'apply', got {self.self_calibration!r}")
         if not self.observers:
             raise ValueError("--observer: give at least one observer name")
         for name in self.observers:
@@ -119,7 +122,11 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
         raise ValueError(f"--out {out_path}: folder {out_path.parent} does not exist")
     params = load_observer_params(options.params_file) if options.params_file else {}
     camera, inertial, features, truth, meas_path = _read_inputs(folder, options.measurements)
-    prepared = prepare_inputs(inertial, features, camera)
+    prepared = prepare_inputs(inertial, features, camera, self_calibration=options.self_calibration)
+    calibration = prepared.calibration
+    if calibration is not None:
+        echo(calibration.describe() + ("" if calibration.applied or calibration.problem
+                                        else " (reported only: --self-calibration applies it)"))
     n_points = int(prepared.points_ok.sum())
     n_lines = int(prepared.lines_ok.sum())
     echo(f"{len(features)} frames from {meas_path}: {n_points} with both threshold corners, {n_lines} with both "
@@ -183,6 +190,8 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
                                          "metres; NaN (null) where a metric has no value",
                                **METRIC_DEFINITIONS},
                "measurements": _path_from(meas_path, metrics_path.parent), "observers": json_ready(metrics)}
+        if calibration is not None:
+            doc["self_calibration"] = json_ready(calibration.summary())
         atomic_write_text(metrics_path, json.dumps(doc, indent=2) + "\n")
         echo(f"wrote {metrics_path}")
     return metrics

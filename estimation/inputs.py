@@ -51,6 +51,11 @@ __all__ = ["InertialSeries", "FeatureSeries", "PreparedInputs", "prepare_inputs"
 TIME_MATCH_S = 1e-6
 #: The runway-heading estimate is used once its standard error is under this (radians).
 HEADING_SETTLED_RAD = math.radians(1.0)
+#: The mounting's self-calibration corrects the steps once its roll and pitch standard deviations
+#: are under this (radians).
+CALIBRATION_SETTLED_RAD = math.radians(0.05)
+#: ... and is not applied at all when it has not settled this long after the first measured frame.
+CALIBRATION_MAX_WAIT_S = 30.0
 
 _NEAR_CORNERS = ("near_left", "near_right")
 _FAR_CORNERS = ("far_left", "far_right")
@@ -247,6 +252,8 @@ class PreparedInputs:
     dpsi_frame_rad : (m,) heading deviation from each frame's own d_F (NaN without d_F).
     frame_reason : (m,) why a frame gave no usable measurement ("" when it did).
     points_ok, lines_ok : (m,) which frames carry usable points / lines for the observers.
+    calibration : :class:`visland.estimation.calibration.MountCalibration` (the self-calibration
+        of the camera mounting whose causal estimate corrected every step), or None when off.
     """
 
     steps: list
@@ -260,6 +267,7 @@ class PreparedInputs:
     frame_reason: np.ndarray
     points_ok: np.ndarray
     lines_ok: np.ndarray
+    calibration: object = None
 
     def __len__(self):
         return len(self.steps)
@@ -337,7 +345,40 @@ def _dF_with_corner_fallback(features: FeatureSeries, ins_f: InertialSeries, cam
     return dF
 
 
-def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: CameraModel) -> PreparedInputs:
+def _position_ned(inertial: InertialSeries, times_s: np.ndarray) -> np.ndarray:
+    """The inertial ground velocity integrated (trapezoids at the unit's rate) to ``times_s``, origin at
+    the first sample: the camera's displacements between frames (the epipolar constraint's T)."""
+    v = inertial.v_ned_mps
+    steps = 0.5 * (v[1:] + v[:-1]) * np.diff(inertial.t_s)[:, None]
+    p = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
+    return np.stack([np.interp(times_s, inertial.t_s, p[:, k]) for k in range(3)], axis=1)
+
+
+def _dpsi_from_vanishing_point(features: FeatureSeries, ins_f: InertialSeries, R_body_from_camera_frame: np.ndarray,
+                               camera: CameraModel) -> np.ndarray:
+    """Heading deviation per frame from the edges' vanishing point (the edge lines, else the four
+    corners), back-projected through each frame's (corrected) mounting into the level heading frame
+    (as :func:`visland.features.dpsi_from_dF`); NaN where neither is measured."""
+    from visland.features import batch_R_runway_from_body
+    m = len(features)
+    vp = np.full((m, 2), np.nan)
+    ok = features.lines_ok
+    if ok.any():
+        vp[ok] = intersect_lines(features.lines[ok, 0, 0], features.lines[ok, 0, 1],
+                                 features.lines[ok, 1, 0], features.lines[ok, 1, 1])
+    corners = np.concatenate([features.near_uv_px, features.far_uv_px], axis=1)
+    fill = ~np.isfinite(vp).all(axis=1) & np.isfinite(corners).all(axis=(1, 2))
+    if fill.any():
+        xy = camera.pixels_to_normalized(corners[fill])
+        vp[fill] = intersect_lines(*line_through_points(xy[:, 0], xy[:, 2]), *line_through_points(xy[:, 1], xy[:, 3]))
+    ray_C = np.concatenate([vp, np.ones((m, 1))], axis=1)
+    R_LC = batch_R_runway_from_body(ins_f.roll_rad, ins_f.pitch_rad, np.zeros(m)) @ R_body_from_camera_frame
+    ray_L = np.einsum("nij,nj->ni", R_LC, ray_C)
+    return np.arctan2(-ray_L[:, 1], ray_L[:, 0])
+
+
+def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: CameraModel,
+                   self_calibration: str = "off", calibration_params=None) -> PreparedInputs:
     """Build the per-step observer inputs (see the module docstring for each quantity).
 
     Parameters
@@ -345,6 +386,11 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     inertial : telemetry at its own rate (>= the frame rate), covering every frame time.
     features : image measurements per frame.
     camera : the nominal camera (``camera.json``): intrinsics and mounting.
+    self_calibration : "off" (``camera.json``'s mounting as it is), "check" (estimate the
+        mounting's error from the runway, :mod:`visland.estimation.calibration`, and report it in
+        ``PreparedInputs.calibration`` without correcting anything) or "apply" (also correct every
+        step with the causal estimate once it has settled; no observer starts before).
+    calibration_params : :class:`visland.estimation.calibration.CalibrationParams` (default tuning).
     """
     frame_t = features.t_s
     if frame_t[0] < inertial.t_s[0] - TIME_MATCH_S or frame_t[-1] > inertial.t_s[-1] + TIME_MATCH_S:
@@ -364,31 +410,80 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     frame_of_step[step_of_frame] = np.arange(len(frame_t))
     ins = inertial.at(times)
 
-    # ---- heading: dpsi per frame from d_F, runway heading as a filtered constant
+    # ---- self-calibration of the mounting: its causal estimate at each frame and each step
     ins_f = inertial.at(frame_t)
+    last_frame = np.searchsorted(frame_t, times + TIME_MATCH_S, side="right") - 1
+    calibration = None
+    mount_error_frame = np.zeros((len(frame_t), 3))
+    calibration_wait = np.zeros(len(frame_t), dtype=bool)
+    if self_calibration not in ("off", "check", "apply"):
+        raise ValueError(f"self_calibration must be 'off', 'check' or 'apply', got {self_calibration!r}")
+    if self_calibration != "off":
+        from visland.estimation.calibration import estimate_mount_error
+        calibration = estimate_mount_error(frame_t, features.near_uv_px, features.far_uv_px, ins_f.roll_rad,
+                                           ins_f.pitch_rad, ins_f.heading_rad, _position_ned(inertial, frame_t),
+                                           camera, calibration_params)
+        if self_calibration == "check":
+            calibration.applied = False
+        elif calibration.applied:
+            # applied once settled (roll and pitch known to CALIBRATION_SETTLED_RAD), and no
+            # observer starts before: the first frames' estimate swings by tenths of a degree,
+            # and a correction switched on under a running observer is a jump of its
+            # measurements (ccpi-hg-2p diverges on a 0.5 deg jump 4 km out). A calibration not
+            # settled CALIBRATION_MAX_WAIT_S after the first measured frame is not applied.
+            settled = np.maximum.accumulate(calibration.sigma[:, :2].max(axis=1) <= CALIBRATION_SETTLED_RAD)
+            measured = np.nonzero(features.points_ok | features.lines_ok)[0]
+            first_t = frame_t[measured[0]] if measured.size else frame_t[0]
+            if settled.any() and frame_t[np.argmax(settled)] <= first_t + CALIBRATION_MAX_WAIT_S:
+                mount_error_frame = np.where(settled[:, None], calibration.mount_error_rad, 0.0)
+                calibration_wait = ~settled
+            else:
+                calibration.applied = False
+                calibration.problem = calibration.problem or (
+                    f"the mounting's self-calibration did not settle within {CALIBRATION_MAX_WAIT_S:g} s of the first "
+                    "measured frame (roll and pitch need the four corners and the threshold corners over a few "
+                    "seconds): camera.json's mounting used as it is")
+    mount_error_step = np.where((last_frame >= 0)[:, None], mount_error_frame[np.clip(last_frame, 0, None)], 0.0)
+    corrected = bool(np.any(mount_error_frame))
+
+    # ---- heading: dpsi per frame from d_F, runway heading as a filtered constant
     dpsi_frame = np.full(len(frame_t), np.nan)
     dF_px = _dF_with_corner_fallback(features, ins_f, camera)
     has_dF = np.isfinite(dF_px)
     if has_dF.any():
         dpsi_frame[has_dF] = dpsi_from_dF(dF_px[has_dF], ins_f.roll_rad[has_dF], ins_f.pitch_rad[has_dF], camera)
+    if corrected:
+        # with a corrected mounting, read the heading from the vanishing point itself (d_F is
+        # measured along the nominal horizon)
+        from visland.estimation.calibration import batch_R_body_from_camera
+        vp_dpsi = _dpsi_from_vanishing_point(features, ins_f, batch_R_body_from_camera(
+            np.asarray(camera.mount_rpy_rad)[None, :] + mount_error_frame), camera)
+        dpsi_frame = np.where(np.isfinite(vp_dpsi), vp_dpsi, dpsi_frame)
     weights = _heading_weights(features.near_uv_px)
     psi_samples = ins_f.heading_rad - dpsi_frame
     psi_rwy_frame = _circular_running_mean(psi_samples, weights)
     settled = np.maximum.accumulate(_running_standard_error(psi_samples, weights) <= HEADING_SETTLED_RAD)
     psi_rwy_frame = np.where(settled, psi_rwy_frame, np.nan)
     # value at each step: the estimate from the frames up to that time (hold the last one)
-    last_frame = np.searchsorted(frame_t, times + TIME_MATCH_S, side="right") - 1
     psi_rwy = np.where(last_frame >= 0, psi_rwy_frame[np.clip(last_frame, 0, None)], np.nan)
     dpsi = wrap_pi(ins.heading_rad - psi_rwy)
 
     # ---- rotations and velocities at every step
-    R_cr = batch_R_camera_from_runway(ins.roll_rad, ins.pitch_rad, dpsi, camera.mount_rpy_rad)
-    R_rc = np.swapaxes(R_cr, -1, -2)
+    if corrected:
+        from visland.estimation.calibration import batch_R_body_from_camera
+        from visland.features import batch_R_runway_from_body
+        R_bc = batch_R_body_from_camera(np.asarray(camera.mount_rpy_rad)[None, :] + mount_error_step)
+        R_rc = batch_R_runway_from_body(ins.roll_rad, ins.pitch_rad, dpsi) @ R_bc
+        R_cr = np.swapaxes(R_rc, -1, -2)
+        omega_camera = np.einsum("nji,nj->ni", R_bc, ins.omega_body_rps)     # R_bc^T w_B per step
+    else:
+        R_cr = batch_R_camera_from_runway(ins.roll_rad, ins.pitch_rad, dpsi, camera.mount_rpy_rad)
+        R_rc = np.swapaxes(R_cr, -1, -2)
+        omega_camera = ins.omega_body_rps @ camera.R_body_from_camera       # = (R_bc^T w_B) row-wise
     c, s = np.cos(psi_rwy), np.sin(psi_rwy)
     vn, ve = ins.v_ned_mps[:, 0], ins.v_ned_mps[:, 1]
     v_runway = np.stack([c * vn + s * ve, -s * vn + c * ve, ins.v_ned_mps[:, 2]], axis=1)
     v_camera = np.einsum("nij,nj->ni", R_cr, v_runway)
-    omega_camera = ins.omega_body_rps @ camera.R_body_from_camera       # = (R_bc^T w_B) row-wise
     n_camera = R_cr[:, :, 2]
 
     # ---- measurements at their steps
@@ -401,6 +496,11 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     reason = features.reason.copy()
     for i in np.nonzero((features.points_ok | features.lines_ok) & ~np.isfinite(psi_rwy[frame_steps]))[0]:
         reason[i] = "no heading deviation yet (neither d_F nor the four corners measured)"
+    if calibration_wait.any():
+        for i in np.nonzero((pts | lines_ok) & calibration_wait)[0]:
+            reason[i] = "mounting self-calibration not settled yet"
+        pts = pts & ~calibration_wait
+        lines_ok = lines_ok & ~calibration_wait
 
     steps = []
     usable = np.isfinite(psi_rwy)
@@ -428,4 +528,4 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
             tas_mps=math.nan if ins.tas_mps is None else float(ins.tas_mps[j])))
     return PreparedInputs(steps=steps, t_s=times, frame_of_step=frame_of_step, step_of_frame=step_of_frame,
                           frame_t_s=frame_t, psi_runway_rad=psi_rwy, dpsi_rad=dpsi, dpsi_frame_rad=dpsi_frame,
-                          frame_reason=reason, points_ok=pts, lines_ok=lines_ok)
+                          frame_reason=reason, points_ok=pts, lines_ok=lines_ok, calibration=calibration)

@@ -88,6 +88,8 @@ class Condition:
     velocity_bias_fraction: float = 0.0
     relative_noise: float = 0.0
     params: dict = field(default_factory=dict)
+    slope_pct: float = 0.0
+    self_calibration: str = "off"
 
 
 @dataclass(frozen=True)
@@ -166,12 +168,17 @@ def simulate_case(scenario_name: str, condition: Condition, seed: int = 0, headi
                                 calibration_error_deg=condition.calibration_error_deg,
                                 imu=ImuParams(velocity_bias_fraction=condition.velocity_bias_fraction, seed=seed),
                                 seed=seed)
-    result = run_simulation(resolve_scenario(scenario_name), options)
+    scenario = resolve_scenario(scenario_name)
+    if condition.slope_pct:
+        from visland.scenarios import with_runway
+        scenario = with_runway(scenario, replace(scenario.runway, slope_pct=condition.slope_pct))
+    result = run_simulation(scenario, options)
     features = FeatureSeries.from_ideal(result.features)
     if heading == "truth" and condition.pixel_noise_px:
-        clean = run_simulation(resolve_scenario(scenario_name), replace(options, pixel_noise_px=0.0))
+        clean = run_simulation(scenario, replace(options, pixel_noise_px=0.0))
         features.dF_px = np.asarray(clean.features.dF_px, dtype=float).copy()
-    prepared = prepare_inputs(InertialSeries.from_imu(result.imu), features, result.options.camera)
+    prepared = prepare_inputs(InertialSeries.from_imu(result.imu), features, result.options.camera,
+                              self_calibration=condition.self_calibration)
     if condition.relative_noise:
         prepared = _with_relative_noise(prepared, condition.relative_noise, seed)
     p = result.frames.p_runway_m
@@ -328,7 +335,7 @@ def _calibration_axes(error_deg: float, echo) -> dict:
         camera_true = camera_with_calibration_error(result.options.camera, vector)
         features = ideal_features(result.frames, result.scenario.runway, result.options.camera, camera_true=camera_true)
         prepared = prepare_inputs(InertialSeries.from_imu(result.imu), FeatureSeries.from_ideal(features),
-                                  result.options.camera)
+                                  result.options.camera, self_calibration="off")
         run = run_observer(make_observer("ccpi-hg-2p"), prepared, (1.0 + INITIAL_HEIGHT_ERROR) * dh[0])
         m = run_metrics(run.t_s, dh, run.dh_m, start_t_s=run.start_t_s)
         out[axis] = {k: json_ready(m[k]) for k in ("err_400ft_m", "err_200ft_m", "err_100ft_m")}
