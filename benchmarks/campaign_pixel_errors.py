@@ -27,24 +27,10 @@ import numpy as np
 
 from visland.camera import CameraModel
 from visland.contracts import json_ready, read_labels, read_measurements, read_truth
+from visland.datasets.pixel_errors import corner_errors_px, edge_errors_px
+from visland.estimation.metrics import FT_TO_M
 
 BANDS = ((3000.0, np.inf, ">3 km"), (1000.0, 3000.0, "1-3 km"), (500.0, 1000.0, "0.5-1 km"), (-np.inf, 500.0, "<0.5 km"))
-FT_TO_M = 0.3048
-
-
-def _edge_error_px(measured, labels, camera):
-    out = []
-    for edge, (near, far) in (("left", ("near_left", "far_left")), ("right", ("near_right", "far_right"))):
-        a = np.stack([labels[f"{near}_u_px"], labels[f"{near}_v_px"]], axis=1)
-        b = np.stack([labels[f"{far}_u_px"], labels[f"{far}_v_px"]], axis=1)
-        pts = np.stack([a + (b - a) * s for s in np.linspace(0.0, 1.0, 9)], axis=1)
-        inside = camera.in_image(pts)
-        d = np.abs(camera.line_distance_px(measured[f"{edge}_rho"][:, None], measured[f"{edge}_theta_rad"][:, None], pts))
-        d = np.where(inside, d, np.nan)
-        count = np.isfinite(d).sum(axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            out.append(np.where(count > 0, np.nansum(d, axis=1) / count, np.nan))
-    return np.fmax(out[0], out[1])
 
 
 def run_errors(run_dir: Path, dataset_dir: Path) -> dict:
@@ -55,10 +41,9 @@ def run_errors(run_dir: Path, dataset_dir: Path) -> dict:
     aim = json.loads((dataset_dir / "runway.json").read_text())["aim_distance_m"]
     distance = -(truth["dx_m"] + aim)                      # to the threshold
     visible = (labels["near_left_visible"] > 0.5) & (labels["near_right_visible"] > 0.5)
-    corner = np.fmax(*(np.hypot(measured[f"{c}_u_px"] - labels[f"{c}_u_px"], measured[f"{c}_v_px"] - labels[f"{c}_v_px"])
-                       for c in ("near_left", "near_right")))
-    corner = np.where(visible, corner, np.nan)
-    edges = _edge_error_px(measured, labels, camera)
+    corners = corner_errors_px(measured, labels)
+    corner = np.where(visible, np.fmax(corners["near_left"], corners["near_right"]), np.nan)   # the worse of P', P''
+    edges = np.fmax(*edge_errors_px(measured, labels, camera).values())                      # the worse edge
     dpsi = np.abs(measured["dpsi_deg"] - truth["dpsi_deg"])
     above = truth["dh_m"] >= 100 * FT_TO_M
     return {"t_s": truth["t_s"], "distance_m": distance, "dh_m": truth["dh_m"], "found": measured["found"] > 0.5,

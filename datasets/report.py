@@ -184,26 +184,12 @@ def _plot_observability(estimates, observers):
 
 
 def _pixel_errors(measurements, labels, camera):
-    """Per-frame corner errors (px) and edge-line distances (px, mean over the visible segment)."""
-    errors = {}
-    for name in CORNER_NAMES:
-        du = measurements[f"{name}_u_px"] - labels[f"{name}_u_px"]
-        dv = measurements[f"{name}_v_px"] - labels[f"{name}_v_px"]
-        visible = labels[f"{name}_visible"] > 0.5
-        errors[name] = np.where(visible, np.hypot(du, dv), np.nan)
+    """Per-frame corner errors (px) and edge-line distances (px), as :mod:`visland.datasets.pixel_errors`
+    defines them (edges only with the camera)."""
+    from visland.datasets.pixel_errors import corner_errors_px, edge_errors_px
+    errors = corner_errors_px(measurements, labels)
     if camera is not None:
-        for edge, (near, far) in (("left", ("near_left", "far_left")), ("right", ("near_right", "far_right"))):
-            pts = []
-            for corner in (near, far):
-                pts.append(np.stack([labels[f"{corner}_u_px"], labels[f"{corner}_v_px"]], axis=1))
-            samples = np.stack([pts[0] + (pts[1] - pts[0]) * s for s in np.linspace(0.0, 1.0, 9)], axis=1)
-            inside = camera.in_image(samples)
-            d = np.abs(camera.line_distance_px(measurements[f"{edge}_rho"][:, None],
-                                               measurements[f"{edge}_theta_rad"][:, None], samples))
-            d = np.where(inside, d, np.nan)
-            counts = np.isfinite(d).sum(axis=1)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                errors[f"{edge} edge"] = np.where(counts > 0, np.nansum(d, axis=1) / counts, np.nan)
+        errors.update({f"{edge} edge": e for edge, e in edge_errors_px(measurements, labels, camera).items()})
     return errors
 
 

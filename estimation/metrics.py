@@ -52,13 +52,12 @@ CONVERGENCE_WINDOW_END_FT = 100.0
 #: One sentence per metric, for metrics.json, the HTML report, compare.md and the studies.
 METRIC_DEFINITIONS = {
     "conv_time_5pct_s": (
-        "5 % convergence time (thesis 5.2.1, 'erreur d'estimation inférieure à 5 % de manière prolongée'): "
         "seconds from the observer's start to the start of its last stay within |dH - dH_hat| <= 0.05 dH "
-        "that lasts until the true height first falls to 100 ft (the end of the thesis's evaluation); "
-        "none (NaN, '-') if outside the band at 100 ft"),
+        "that lasts until the true height first falls to 100 ft (thesis 5.2.1: error under 5 % 'de manière "
+        "prolongée', its evaluation ending at 100 ft); none if outside the band at 100 ft"),
     "conv_time_5pct_to_end_s": (
-        "5 % convergence time to the end of the run: the same, the stay lasting to the last sample "
-        "(below 100 ft 5 % of dH is a few decimetres; one late excursion makes it none)"),
+        "the same, the stay lasting to the last sample (stricter than the thesis: below 100 ft 5 % of dH is "
+        "a few decimetres, and one late excursion leaves it undefined)"),
     "err_<h>ft_m": "dH - dH_hat (m) where the true height first falls to h ft, interpolated between samples",
     "std_err_along_m": "standard deviation of dH - dH_hat over the samples with an estimate (thesis Table 5.8)",
     "rms_err_m": "root mean square of dH - dH_hat over the samples with an estimate",
