@@ -148,9 +148,11 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
         if source.runway_json is not None:
             shutil.copyfile(source.runway_json, staging / "runway.json")
         read_measurements(staging / "measurements.csv")       # what we hand on reads back cleanly
+        not_started: dict = {}
         metrics = estimate_folder(staging, _with_measurements(estimate_options, staging / "measurements.csv"),
                                   staging / "estimates.csv",
-                                  echo=lambda line: echo(line.replace(str(staging), str(out_dir))))
+                                  echo=lambda line: echo(line.replace(str(staging), str(out_dir))),
+                                  not_started=not_started)
         deviations = _deviation_errors(source.truth, staging / "estimates.csv") if source.truth is not None else {}
         if metrics:
             doc = json.loads((staging / "metrics.json").read_text())
@@ -170,6 +172,8 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
             "n_found": measurements.n_found,
             "n_flagged": len(measurements.flagged),
             "flagged": [{"frame": int(i), "reason": r} for i, r in measurements.flagged],
+            # observers that never started (their estimates.csv rows are empty), and why
+            "no_estimates": not_started,
             "throughput": {
                 "measure_wall_s": measurements.wall_s,
                 "analysis_s": measurements.analysis_s,
@@ -209,9 +213,12 @@ def _write_report(folder: Path, source, measurements, metrics, deviations, run) 
         ("frames", f"{run['n_frames']} ({run['n_found']} with the runway found, {run['n_flagged']} unusable)"),
         ("throughput", "-" if not throughput["fps_with_decoding"] else
          f"{throughput['fps_with_decoding']:.1f} frames/s with decoding, "
-         f"{throughput['fps_analysis_only']:.1f} frames/s analysis only"),
+         + (f"{throughput['fps_analysis_only']:.1f} frames/s analysis only" if throughput["fps_analysis_only"]
+            else "no frame analysed")),
         ("observers", ", ".join(run["observers"])),
     ]
+    for observer, why in run.get("no_estimates", {}).items():
+        summary.append((f"{observer}: no estimates", why))
     write_report(folder / "report.html", title=f"visland run: {run['scenario'] or Path(run['input']).name} "
                                                f"({run['source']})",
                  summary_rows=summary, measurements=columns, estimates=dict(estimates),
@@ -228,6 +235,11 @@ def _print_summary(run, metrics, deviations, out_dir, echo, report: bool = True)
     echo(f"{run['n_frames']} frames: runway found in {run['n_found']}, {run['n_flagged']} unusable; "
          f"{t['fps_with_decoding'] or 0:.1f} frames/s with decoding, {t['fps_analysis_only'] or 0:.1f} frames/s "
          f"analysis only")
+    if run.get("no_estimates"):
+        names = list(run["no_estimates"])
+        first = run["no_estimates"][names[0]]
+        echo(f"no estimates from {', '.join(names)}: {first}" if len(set(run["no_estimates"].values())) == 1 else
+             "no estimates from " + "; ".join(f"{name} ({why})" for name, why in run["no_estimates"].items()))
     if metrics:
         echo(f"{'observer':14s} {'conv 5% s':>9s} {'dH@400ft':>9s} {'dH@200ft':>9s} {'dH@100ft':>9s} "
              f"{'dY@100ft':>9s} {'dX@100ft':>9s}")

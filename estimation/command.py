@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -104,10 +105,13 @@ def _read_inputs(folder: Path, measurements: str):
     return camera, InertialSeries.from_table(telemetry), features, truth, path
 
 
-def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> dict:
+def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_started: dict | None = None) -> dict:
     """Run ``options.observers`` on ``folder``; write ``out_path`` (and metrics.json with truth).
 
-    Returns the metrics per observer (empty without truth).
+    Returns the metrics per observer (empty without truth). An observer that cannot start
+    (no frame carries the features it needs) still has its rows in ``out_path``, every estimate
+    cell empty and coasting = 1; why it did not start is echoed and, when ``not_started`` is a
+    dict, stored there under its name.
     """
     from visland.contracts import ESTIMATE_COLUMNS, atomic_write_text, write_csv
     from visland.estimation.inputs import prepare_inputs
@@ -137,7 +141,11 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
     for name in options.observers:
         start = prepared.first_step_with(observer_features(name))
         if start is None:
-            echo(f"{name}: no frame carries usable {observer_features(name)}; no estimates")
+            why = _why_not_started(prepared, observer_features(name))
+            echo(f"{name}: no estimates: {why}")
+            if not_started is not None:
+                not_started[name] = why
+            _append_empty_rows(columns, name, prepared.frame_t_s)
             continue
         frame = prepared.frame_of_step[start]
         if options.initial_height_m is not None:
@@ -195,6 +203,30 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print) -> d
         atomic_write_text(metrics_path, json.dumps(doc, indent=2) + "\n")
         echo(f"wrote {metrics_path}")
     return metrics
+
+
+def _why_not_started(prepared, features: str) -> str:
+    """One sentence: no frame carries ``features``, and the most frequent reasons the frames give."""
+    counts: dict = {}
+    for reason in prepared.frame_reason:
+        # one count per cause, not per frame: the frame's own number and file name are dropped
+        reason = re.sub(r"frame \d+( \([^)]*\))?: ", "", str(reason)) or f"no usable {features}"
+        reason = reason if len(reason) <= 160 else reason[:157] + "..."
+        counts[reason] = counts.get(reason, 0) + 1
+    top = sorted(counts.items(), key=lambda item: -item[1])[:3]
+    n = len(prepared.frame_reason)
+    listed = "; ".join(f"{count} of {n} frames: {reason}" for reason, count in top)
+    return f"no frame carries usable {features} ({listed})"
+
+
+def _append_empty_rows(columns: dict, name: str, frame_t_s) -> None:
+    """Rows of an observer that never started: one per frame, no estimate, coasting."""
+    for t_s in frame_t_s:
+        for key in columns:
+            columns[key].append(math.nan)
+        columns["observer"][-1] = name
+        columns["t_s"][-1] = float(t_s)
+        columns["coasting"][-1] = 1
 
 
 def _path_from(path: Path, folder: Path) -> str:

@@ -53,11 +53,15 @@ def _required(point_names) -> list:
     return near if near else list(point_names)
 
 
-def steps_to_columns(steps, times_s, point_names, anchor_min_confidence: float = 0.5) -> dict:
+def steps_to_columns(steps, times_s, point_names, anchor_min_confidence: float = 0.5,
+                     run_source: str = "tracking") -> dict:
     """Columns (dict of lists) of ``measurements.csv`` for a sequence of :class:`TrackStep`.
 
     ``steps`` holds one entry per frame, None for a frame before the designation (written as
-    not found, reason "before the designation"); ``times_s`` the frame times.
+    not found, reason "before the designation"); ``times_s`` the frame times. A measured row's
+    ``source`` says how it was measured (``anchored`` when a detection re-anchored a point,
+    else ``tracking``); a row that measured nothing (before the designation, a skipped frame)
+    carries ``run_source``, the run's own source.
     """
     point_names = list(point_names)
     columns = {c: [] for c in measurement_columns(point_names)}
@@ -67,7 +71,7 @@ def steps_to_columns(steps, times_s, point_names, anchor_min_confidence: float =
         row["frame"] = frame
         row["t_s"] = float(t_s)
         if step is None:
-            row.update(source="tracking", found=0, reason="before the designation")
+            row.update(source=run_source, found=0, reason="before the designation")
             for name in CORNER_NAMES:
                 row[f"{name}_visible"] = 0 if name in point_names else math.nan
             for c in columns:
@@ -99,7 +103,8 @@ def steps_to_columns(steps, times_s, point_names, anchor_min_confidence: float =
             row["dF_px"] = anchor.dF_px
             row["dpsi_deg"] = math.degrees(anchor.dpsi_rad) if math.isfinite(anchor.dpsi_rad) else math.nan
         finite_scores = [s for s in scores if math.isfinite(s)]
-        row["source"] = "anchored" if step.anchored else "tracking"
+        measured_any = any(report.measured for report in step.points)
+        row["source"] = ("anchored" if step.anchored else "tracking") if measured_any else run_source
         row["found"] = 1 if found else 0
         row["reason"] = step.reason()
         row["confidence"] = (float(np.clip(min(finite_scores), 0.0, 1.0)) if (found and finite_scores)

@@ -172,7 +172,8 @@ def track_source(source, init: str | None = "labels", params: TrackerParams | No
         if progress is not None:
             progress(index + 1, n)
     names = tracker.point_names
-    columns = steps_to_columns(steps, source.times_s, names, params.anchor_min_confidence)
+    columns = steps_to_columns(steps, source.times_s, names, params.anchor_min_confidence,
+                               run_source="anchored" if anchor else "tracking")
     return TrackRun(steps, names, columns, measurement_columns(names), start, params, anchor, flagged, analysis)
 
 

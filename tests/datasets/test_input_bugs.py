@@ -7,6 +7,7 @@ replaced without --force, a folder entry that is not an image file is named.
 import json
 import shutil
 
+import numpy as np
 import pytest
 
 from visland.cli import main
@@ -74,3 +75,98 @@ def test_estimate_refuses_to_replace_its_outputs_without_force(simulated, tmp_pa
     assert (out.read_bytes(), (folder / "metrics.json").read_bytes()) == before
     assert main(args + ["--force"]) == 0
     json.loads((folder / "metrics.json").read_text())
+
+
+# ---------------------------------------------------------------- rendered frames (items 1, 2, 3, 9)
+SIZE = 384
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory):
+    """A short approach (1.5 km, 16 s) rendered at 384 px and 2 Hz: 33 frames."""
+    from visland.camera import CameraModel
+    from visland.datasets import generate as gen
+    from visland.render.params import SceneParams
+    from visland.scenarios import Scenario
+    from visland.simulate import SimulationOptions
+    scenario = Scenario("short", dx_m=-1500.0, dy_m=25.0, dgs_m=-5.0, dpsi_deg=2.0, gamma_deg=-3.0)
+    options = SimulationOptions(fps=2.0, camera=CameraModel.default(SIZE), seed=1)
+    out = tmp_path_factory.mktemp("gen") / "short"
+    gen.generate_dataset(gen.GenerateJob(scenario, options, SceneParams(seed=1)), out, progress=False)
+    return out
+
+
+def _process(folder, out, source, observers, **kwargs):
+    from visland.datasets.process import ProcessOptions, process_input
+    return process_input(folder, out, ProcessOptions(source=source, observers=observers, quiet=True, report=False,
+                                                     **kwargs), echo=lambda line: None)
+
+
+def _estimates_by_observer(path):
+    from visland.contracts import read_estimates
+    table = read_estimates(path)
+    return {name: {k: table[k][table["observer"] == name] for k in ("t_s", "dh_m", "coasting")}
+            for name in dict.fromkeys(table["observer"])}
+
+
+# ---------------------------------------------------------------- item 1: a flagged frame leaves everything coasting
+ITEM1_OBSERVERS = ("ekf-2l", "cccj-2l", "ccpi-hg-2p", "ecc-hg")
+
+
+@pytest.mark.parametrize("source", ["anchored", "tracking", "detection"])
+def test_an_unreadable_frame_leaves_every_source_and_observer_coasting(rendered, tmp_path, source):
+    from visland.contracts import read_measurements
+    bad = 10
+    folder = tmp_path / "damaged"
+    shutil.copytree(rendered, folder)
+    sorted((folder / "frames").iterdir())[bad].write_bytes(b"not an image")
+    run = _process(folder, tmp_path / "bad", source, ITEM1_OBSERVERS)
+    assert [item["frame"] for item in run["flagged"]] == [bad] and "unreadable" in run["flagged"][0]["reason"]
+    measurements = read_measurements(tmp_path / "bad" / "measurements.csv")
+    assert measurements["found"][bad] == 0 and measurements["source"][bad] == source
+    assert f"frame {bad}" in measurements["reason"][bad]
+    features = [c for c in measurements if c.endswith(("_px", "_rho", "_rad")) or c == "dF_px"]
+    assert all(np.isnan(measurements[c][bad]) for c in features)
+    damaged = _estimates_by_observer(tmp_path / "bad" / "estimates.csv")
+    assert set(damaged) == set(ITEM1_OBSERVERS)
+    for name, series in damaged.items():
+        assert series["coasting"][bad] == 1, name
+    if source != "anchored":
+        return
+    # the frames after the bad one: as good as without it (the clean run within a few metres at the end)
+    _process(rendered, tmp_path / "clean", source, ITEM1_OBSERVERS)
+    clean = _estimates_by_observer(tmp_path / "clean" / "estimates.csv")
+    for name in ITEM1_OBSERVERS:
+        after = slice(bad + 1, None)
+        assert np.all(np.abs(damaged[name]["dh_m"][after]) < 1000.0), name
+        assert abs(damaged[name]["dh_m"][-1] - clean[name]["dh_m"][-1]) < 3.0, name
+
+
+# ---------------------------------------------------------------- item 3: a run where no observer can start
+def test_a_run_without_any_usable_frame_completes_and_says_why(rendered, tmp_path):
+    from visland.contracts import read_measurements
+    from visland.datasets.process import ProcessOptions, process_input
+    folder = tmp_path / "wrong-camera"
+    shutil.copytree(rendered, folder)
+    camera = json.loads((folder / "camera.json").read_text())
+    camera["width"] = SIZE + 16                                   # every frame is 384 px wide
+    (folder / "camera.json").write_text(json.dumps(camera))
+    lines = []
+    out = tmp_path / "run"
+    run = process_input(folder, out, ProcessOptions(source="detection", observers=("ccpi-hg-2p", "ekf-2l"), quiet=True),
+                        echo=lines.append)
+    n = len(list((folder / "frames").iterdir()))
+    assert run["n_frames"] == n and run["n_found"] == 0 and run["n_flagged"] == n
+    measurements = read_measurements(out / "measurements.csv")
+    assert measurements.n_rows == n and not measurements["found"].any()
+    assert all(f"camera.json says {SIZE + 16}x{SIZE}" in reason for reason in measurements["reason"])
+    estimates = _estimates_by_observer(out / "estimates.csv")
+    assert set(estimates) == {"ccpi-hg-2p", "ekf-2l"}
+    for series in estimates.values():
+        assert len(series["dh_m"]) == n and np.isnan(series["dh_m"]).all() and (series["coasting"] == 1).all()
+    assert set(run["no_estimates"]) == {"ccpi-hg-2p", "ekf-2l"}
+    assert all(f"{n} of {n} frames" in why and f"camera.json says {SIZE + 16}x{SIZE}" in why
+               for why in run["no_estimates"].values())
+    assert json.loads((out / "run.json").read_text())["no_estimates"] == run["no_estimates"]
+    assert any(line.startswith("no estimates from ccpi-hg-2p") and "ekf-2l" in line for line in lines)
+    assert "no estimates" in (out / "report.html").read_text()
