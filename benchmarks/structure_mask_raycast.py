@@ -69,6 +69,10 @@ def main(argv=None) -> int:
     parser.add_argument("--frames", type=int, default=30, help="frames spread over the approach (default 30)")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--k1", type=float, default=0.0, help="radial distortion of the lens (default 0)")
+    parser.add_argument("--lines", action="store_true",
+                        help="also estimate k1 from straight edges (visland calibrate --lines), with and without "
+                             "the proposed mask")
     parser.add_argument("--picture", metavar="PNG", help="write the frame | mask check picture here")
     parser.add_argument("--frames-dir", metavar="DIR", help="also write the cockpit frames here (DIR/frames/)")
     args = parser.parse_args(argv)
@@ -84,7 +88,8 @@ def main(argv=None) -> int:
     from visland.structure_mask import mask_picture, propose_structure_mask
 
     width, height = (int(a) for a in args.size.lower().split("x"))
-    camera = CameraModel.from_fov(width, height, args.hfov, (0.0, -4.0, 0.0))
+    camera = CameraModel.from_fov(width, height, args.hfov, (0.0, -4.0, 0.0),
+                                  (args.k1, 0.0, 0.0, 0.0, 0.0) if args.k1 else None)
     sim = run_simulation(resolve_scenario(args.scenario), SimulationOptions(fps=5.0, camera=camera))
     states = sim.frames
     chosen = evenly_spaced(len(states.t_s), args.frames)
@@ -120,10 +125,20 @@ def main(argv=None) -> int:
         picture = mask_picture(frames[len(frames) // 2], result.mask)
         cv2.imwrite(args.picture, cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))
         print(f"wrote {args.picture}")
-    print(json.dumps({"benchmark": "structure_mask_raycast", "scenario": args.scenario, "size": [width, height],
-                      "hfov_deg": args.hfov, "frames": len(frames), "structure_covered": round(covered, 4),
-                      "rest_taken": round(taken, 4), "coverage": round(result.coverage, 4),
-                      "mask_s": round(mask_s, 2)}))
+    figures = {"benchmark": "structure_mask_raycast", "scenario": args.scenario, "size": [width, height],
+               "hfov_deg": args.hfov, "k1": args.k1, "frames": len(frames), "structure_covered": round(covered, 4),
+               "rest_taken": round(taken, 4), "coverage": round(result.coverage, 4), "mask_s": round(mask_s, 2)}
+    if args.lines:
+        from visland.lens import estimate_k1_from_lines
+        for name, ignore in (("k1_from_lines", None), ("k1_from_lines_masked", result.mask)):
+            try:
+                estimate = estimate_k1_from_lines(frames, camera.fx, camera.fy, camera.cx, camera.cy, ignore=ignore)
+                figures[name] = round(estimate.k1, 4)
+                print(f"{name}: {estimate.k1:.4f} (truth {args.k1}) from {estimate.pieces} pieces")
+            except ValueError as error:
+                figures[name] = None
+                print(f"{name}: {error}")
+    print(json.dumps(figures))
     return 0
 
 

@@ -43,6 +43,35 @@ def _check_out(path, force: bool):
     return out
 
 
+def _lens_from_lines(args, camera):
+    """``camera`` with the k1 of the straight edges in the footage (plumb-line, :mod:`visland.lens`)."""
+    from dataclasses import replace
+
+    import cv2
+
+    from visland.footage import sample_footage
+    from visland.lens import estimate_k1_from_lines
+    count = args.examine or 20
+    if count < 1:
+        raise ValueError(f"--examine must be at least 1 frame, got {count}")
+    frames, total = sample_footage(args.footage, count)
+    ignore = None
+    if args.mask:
+        image = cv2.imread(str(args.mask), cv2.IMREAD_GRAYSCALE)
+        if image is None:
+            raise ValueError(f"{args.mask}: unreadable mask image")
+        if image.shape != (camera.height, camera.width):
+            raise ValueError(f"{args.mask}: mask is {image.shape[1]}x{image.shape[0]} but the frames are "
+                             f"{camera.width}x{camera.height}")
+        ignore = image > 127
+    result = estimate_k1_from_lines([f.image for f in frames], camera.fx, camera.fy, camera.cx, camera.cy,
+                                    ignore=ignore)
+    print(f"{args.footage}: {total} frames, {len(frames)} searched for straight edges; k1 {result.k1:.4f} from "
+          f"{result.pieces} edge pieces (RMS distance to their lines {result.straightness_before_px:.3f} px "
+          f"without distortion, {result.straightness_after_px:.3f} px with)")
+    return replace(camera, distortion=(result.k1, 0.0, 0.0, 0.0, 0.0))
+
+
 def _cmd_calibrate(args) -> int:
     import math
 
@@ -52,6 +81,10 @@ def _cmd_calibrate(args) -> int:
     if args.hfov_deg is not None:
         if args.footage is None and args.size is None:
             raise ValueError("--hfov-deg needs the frame size: give --size WxH or the footage")
+        if args.lines and args.footage is None:
+            raise ValueError("--lines needs footage to find straight edges in")
+        if args.mask and not args.lines:
+            raise ValueError("--mask goes with --lines (the structure's edges are left out of the line fit)")
         size = args.size
         if args.footage is not None:
             frames, _ = sample_footage(args.footage, 1)
@@ -60,12 +93,17 @@ def _cmd_calibrate(args) -> int:
                 raise ValueError(f"--size {size[0]}x{size[1]} but {frames[0].name} is {width}x{height}")
             size = (width, height)
         camera = CameraModel.from_fov(size[0], size[1], args.hfov_deg, mount_rpy_deg=args.mount_deg)
+        if args.lines:
+            camera = _lens_from_lines(args, camera)
         camera.save(out)
+        lens = (f"distortion k1 {camera.distortion[0]:.4f} from straight edges" if args.lines else "no distortion")
         print(f"camera from a {args.hfov_deg:g} deg horizontal field of view: {camera.width}x{camera.height}, "
-              f"fx = fy = {camera.fx:.2f} px, principal point at the centre, no distortion (a guess: "
-              f"calibrate with a chessboard when you can)")
+              f"fx = fy = {camera.fx:.2f} px, principal point at the centre, {lens} (a guess: calibrate with a "
+              f"chessboard when you can)")
         print(f"wrote {out}")
         return 0
+    if args.lines or args.mask:
+        raise ValueError("--lines and --mask go with --hfov-deg (a camera from a field of view)")
     from visland.lens import calibrate_views, find_board_views, parse_board
     if args.footage is None:
         raise ValueError("give the chessboard footage (a video or a folder of images), or --hfov-deg for a "
@@ -75,9 +113,9 @@ def _cmd_calibrate(args) -> int:
     board = parse_board(args.board)
     if args.square_mm is None or not (math.isfinite(args.square_mm) and args.square_mm > 0):
         raise ValueError(f"--square-mm must be the positive side of a board square in millimetres, got {args.square_mm}")
-    if args.examine < 1:
+    if args.examine is not None and args.examine < 1:
         raise ValueError(f"--examine must be at least 1 frame, got {args.examine}")
-    frames, total = sample_footage(args.footage, args.examine)
+    frames, total = sample_footage(args.footage, args.examine or 200)
     views = find_board_views(frames, board)
     if not views:
         raise ValueError(f"{args.footage}: no {args.board} chessboard found in any of the {len(frames)} frames "
@@ -149,7 +187,7 @@ def register(subparsers):
                     "the footage, go to calibrateCamera (fx, fy, cx, cy and k1, k2, p1, p2, k3). Writes camera.json "
                     "(SPEC format, with \"distortion\") and prints the RMS reprojection error and the views used. "
                     "Without a calibration, --hfov-deg writes a pinhole camera from the horizontal field of view "
-                    "(size from --size or the footage); distortion is then not estimated.")
+                    "(size from --size or the footage); with --lines, k1 is estimated from edges straight in the world.")
     p.add_argument("footage", nargs="?", metavar="VIDEO|DIR", help="chessboard video or folder of images")
     p.add_argument("--out", required=True, metavar="FILE", help="camera.json to write (refused if it exists)")
     p.add_argument("--board", default="9x6", metavar="COLSxROWS",
@@ -158,13 +196,18 @@ def register(subparsers):
                    help="side of one square in millimetres (required for a calibration)")
     p.add_argument("--max-views", type=int, default=40, metavar="N",
                    help="most board views used, spread over the footage (default 40)")
-    p.add_argument("--examine", type=int, default=200, metavar="N",
-                   help="frames searched for the board, spread over the footage (default 200)")
+    p.add_argument("--examine", type=int, default=None, metavar="N",
+                   help="frames searched for the board (default 200) or for straight edges (--lines, default 20), "
+                        "spread over the footage")
     p.add_argument("--mount-deg", type=_three_angles, default=(0.0, 0.0, 0.0), metavar="R,P,Y",
                    help="camera mounting on the body written to camera.json, degrees (default 0,0,0)")
     p.add_argument("--hfov-deg", type=float, default=None, metavar="DEG",
                    help="no calibration: camera from this horizontal field of view (no distortion)")
     p.add_argument("--size", type=_size, default=None, metavar="WxH", help="frame size for --hfov-deg without footage")
+    p.add_argument("--lines", action="store_true",
+                   help="with --hfov-deg and footage: estimate k1 from edges straight in the world (field "
+                        "boundaries, roads, runway edges, horizon) that the lens bends")
+    p.add_argument("--mask", metavar="PNG", help="with --lines: the aircraft's structure (visland mask), left out")
     p.add_argument("--force", action="store_true", help="replace an existing output file")
     p.set_defaults(func=_cmd_calibrate)
 

@@ -128,3 +128,48 @@ def test_calibration_from_a_video(tmp_path, capsys):
     for key in ("fx", "fy", "cx", "cy"):
         assert data[key] == pytest.approx(TRUE_K[key], rel=0.01), key
     assert data["distortion"][0] == pytest.approx(TRUE_DISTORTION[0], abs=0.02)
+
+
+# ----------------------------------------------------------------------------- straight lines
+LINE_K = dict(fx=448.0, fy=448.0, cx=319.5, cy=239.5)     # 640x480, 71 deg across: from_fov's centre
+LINE_VIEWS = [(10, 40), (25, 30), (40, 50), (70, 35)]      # (yaw, tilt) of the camera over the fields
+
+
+def _field_folder(folder, k1):
+    from tests.helpers.line_scene import render_fields
+    folder.mkdir()
+    for n, (yaw, tilt) in enumerate(LINE_VIEWS):
+        cv2.imwrite(str(folder / f"{n}.png"), render_fields(LINE_K, (k1, 0.0, 0.0, 0.0, 0.0), yaw, tilt, seed=n))
+    return folder
+
+
+def test_k1_from_straight_lines(tmp_path, capsys):
+    folder = _field_folder(tmp_path / "fields", -0.12)
+    hfov = math.degrees(2 * math.atan(320.0 / LINE_K["fx"]))
+    out = tmp_path / "camera.json"
+    assert main(["calibrate", str(folder), "--hfov-deg", f"{hfov:.6f}", "--lines", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "edge pieces" in printed
+    data = json.loads(out.read_text())
+    assert data["fx"] == pytest.approx(LINE_K["fx"], rel=1e-6)
+    k1, k2, p1, p2, k3 = data["distortion"]
+    assert k1 == pytest.approx(-0.12, abs=0.012) and (k2, p1, p2, k3) == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_straight_lines_of_a_pinhole_lens_give_k1_near_zero(tmp_path):
+    from visland.lens import estimate_k1_from_lines
+    folder = _field_folder(tmp_path / "fields", 0.0)
+    frames = [cv2.imread(str(p), cv2.IMREAD_GRAYSCALE) for p in sorted(folder.iterdir())]
+    result = estimate_k1_from_lines(frames, **LINE_K)
+    assert abs(result.k1) < 0.012 and result.pieces >= 50
+    assert result.straightness_after_px < 0.2
+
+
+def test_no_straight_edges_is_one_sentence(tmp_path, capsys):
+    folder = tmp_path / "noise"
+    folder.mkdir()
+    rng = np.random.default_rng(4)
+    for i in range(3):
+        cv2.imwrite(str(folder / f"{i}.png"), np.full((240, 320), 128, np.uint8) + rng.integers(0, 3, (240, 320), dtype=np.uint8))
+    message = _error(capsys, ["calibrate", str(folder), "--hfov-deg", "60", "--lines", "--out", str(tmp_path / "c.json")])
+    assert "long straight edge pieces found in 3 frames" in message
