@@ -39,6 +39,7 @@ def test_simulate_writes_the_spec_files(tmp_path, capsys):
     assert labels["near_left_visible"][0] == 1
 
 
+@pytest.mark.slow
 def test_airspeed_column_and_wind_truth(tmp_path):
     out = tmp_path / "wind"
     assert main(["simulate", "--scenario", "dickmanns-wind", "--out", str(out), "--airspeed-noise", "0"]) == 0
@@ -98,6 +99,7 @@ def test_simulate_starts_fast_without_heavy_imports():
     assert result.stdout.strip() == ""
 
 
+@pytest.mark.slow
 def test_slope_option_reaches_runway_json_and_the_labels(tmp_path, capsys):
     flat, sloped = tmp_path / "flat", tmp_path / "sloped"
     assert main(["simulate", "--scenario", "thesis-2", "--out", str(flat)]) == 0

@@ -71,6 +71,7 @@ def test_initial_conditions_follow_the_scenario(flights):
     assert math.degrees(ecc.dpsi_rad[0]) == pytest.approx(15.0)
 
 
+@pytest.mark.slow
 def test_body_rates_are_the_derivative_of_the_attitude():
     # at 250 Hz: the orders are held over each step, so finite differences are only as sharp as the step
     trajectory = simulate_flight(BUILTIN_SCENARIOS["thesis-8"], rate_hz=250.0)

@@ -40,6 +40,7 @@ def test_footage_that_does_not_move_is_refused(cockpit):
         propose_structure_mask([frames[0]] * 8, source="still.mp4")
 
 
+@pytest.mark.slow
 def test_mask_command_writes_mask_picture_and_camera_line(cockpit, tmp_path, capsys):
     frames, truth = cockpit
     folder = tmp_path / "clip" / "frames"

@@ -46,6 +46,7 @@ def test_a_json_or_toml_starting_with_a_byte_order_mark_is_read(simulated, tmp_p
 
 
 # ---------------------------------------------------------------- item 7: process --no-report
+@pytest.mark.slow
 def test_process_without_report_does_not_list_it(simulated, tmp_path):
     from visland.datasets.process import ProcessOptions, process_input
     lines = []

@@ -49,6 +49,7 @@ def test_tracking_from_the_previous_frame():
         assert edge_error_px(camera, labels1, second, side) < 1.0
 
 
+@pytest.mark.slow
 def test_the_same_detector_serves_every_image_size():
     """Parameters are given for 2048 px frames and rescaled: a 512 px frame works with defaults."""
     image, camera, state, labels = frame("thesis-8", 600.0, size=512, concrete=True)

@@ -92,6 +92,7 @@ def test_a_run_that_stays_above_100ft_is_judged_to_its_end():
         convergence_time_s(T_S, truth, est, until_height_m=-1.0)
 
 
+@pytest.mark.slow
 def test_compare_reads_the_start_from_metrics_json_and_shows_the_thesis_time(tmp_path):
     """A hand-made run folder: compare's table holds 7.5 s (thesis) and 16.5 s (strict) for the
     observer that converges before 100 ft, and '-' for the strict time of one whose last sample is off."""

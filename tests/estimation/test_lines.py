@@ -222,6 +222,7 @@ def test_the_chart_representative_of_a_measured_edge_does_not_matter(name):
     np.testing.assert_allclose(a, b, rtol=1e-9)
 
 
+@pytest.mark.slow
 def test_ekf_covariance_stays_symmetric_positive_definite():
     tr, inputs = make_inputs("thesis-7")
     estimates = fly(EKF2L(), tr, inputs, 0.8)

@@ -29,12 +29,14 @@ def test_academic_example_truth_is_the_linear_system():
     assert np.allclose(result.x[-1], sol.y[:, -1], atol=1e-8)
 
 
+@pytest.mark.slow
 def test_depth_within_one_percent_two_seconds_after_the_start():
     result = academic_example()
     assert result.relative_depth_error_at(2.0) < 0.01
     assert result.relative_depth_error_at(0.0) == pytest.approx(1.5 / 2.5)     # the seed's initial error
 
 
+@pytest.mark.slow
 def test_noisy_measurements_still_converge():
     result = academic_example(noise_fraction=0.01, seed=2)
     assert result.relative_depth_error_at(3.0) < 0.03
