@@ -1,218 +1,51 @@
 """The thesis result tables the studies compare against (Gibert 2016, chapter 5).
 
-Transcribed from ../shared/seeds/thesis_tables.csv (tables 5.3, 5.4, 5.6, 5.7, 5.8, 5.10, 5.12),
-so that ``visland study`` runs from an installed package. Errors are ``dH - dH_hat`` in metres;
-"traj1" is scenario thesis-1, "all8" the eight scenarios of thesis Table 5.2. Observer names are
-SPEC's (the thesis's EKF_2P is ``kf-2p``).
+The figures ship as a data file beside this module, ``estimation/thesis_tables.csv`` (a copy of
+../shared/seeds/thesis_tables.csv: tables 5.3, 5.4, 5.6, 5.7, 5.8, 5.10, 5.12 of the observers
+and 5.14-5.16 of image processing), read when this module is imported, so that ``visland study`` runs
+from an installed package. Columns ``table,condition,features,observer,metric,value``; errors
+are ``dH - dH_hat`` in metres; "traj1" is scenario thesis-1, "all8" the eight scenarios of
+thesis Table 5.2. Observer names are SPEC's (the thesis's EKF_2P is ``kf-2p``).
 """
 from __future__ import annotations
 
-__all__ = ["THESIS_TABLES", "THESIS_CONDITIONS", "thesis_value"]
+import csv
+import io
+import math
+from importlib.resources import files
 
-#: table -> (condition, features)
-THESIS_CONDITIONS = {
-    '5.3': ('ideal measurements (simulated image analysis)', '2 points'),
-    '5.4': ('ideal measurements (simulated image analysis)', '2 lines'),
-    '5.6': ('1 px Gaussian noise', '2 points'),
-    '5.7': ('5 px Gaussian noise', '2 points'),
-    '5.8': ('noise, std of error along trajectory 1', '2 points'),
-    '5.10': ('0.5 deg camera calibration error', '2 points'),
-    '5.12': ('5 % velocity bias', '2 points'),
-}
+__all__ = ["THESIS_DATA", "THESIS_TABLES", "THESIS_CONDITIONS", "thesis_value"]
+
+#: the data file, inside the installed package
+THESIS_DATA = "thesis_tables.csv"
+_COLUMNS = ("table", "condition", "features", "observer", "metric", "value")
+
+
+def _read() -> tuple[dict, dict]:
+    """The data file as ``({(table, observer, metric): value}, {table: (condition, features)})``."""
+    text = files("visland.estimation").joinpath(THESIS_DATA).read_text(encoding="utf-8")
+    reader = csv.DictReader(io.StringIO(text))
+    if tuple(reader.fieldnames or ()) != _COLUMNS:
+        raise ValueError(f"{THESIS_DATA}: columns {reader.fieldnames}, expected {list(_COLUMNS)}")
+    tables, conditions = {}, {}
+    for line, row in enumerate(reader, start=2):
+        try:
+            value = float(row["value"])
+        except (TypeError, ValueError):
+            value = math.nan
+        if not math.isfinite(value):
+            raise ValueError(f"{THESIS_DATA} line {line}: value {row['value']!r} is not a finite number")
+        key = (row["table"], row["observer"], row["metric"])
+        if key in tables:
+            raise ValueError(f"{THESIS_DATA} line {line}: table {key[0]}, {key[1]}, {key[2]} given twice")
+        tables[key] = value
+        conditions.setdefault(row["table"], (row["condition"], row["features"]))
+    return tables, conditions
+
 
 #: (table, observer, metric) -> value
-THESIS_TABLES = {
-    ('5.3', 'cccs-2p', 'conv_time_5pct_s_traj1'): 5.64,
-    ('5.3', 'ii-2p', 'conv_time_5pct_s_traj1'): 4.62,
-    ('5.3', 'ccpi-hg-2p', 'conv_time_5pct_s_traj1'): 5.83,
-    ('5.3', 'kf-2p', 'conv_time_5pct_s_traj1'): 8.88,
-    ('5.3', 'oj-2p', 'conv_time_5pct_s_traj1'): 4.51,
-    ('5.3', 'cccs-2p', 'err_400ft_m_traj1'): 2e-05,
-    ('5.3', 'ii-2p', 'err_400ft_m_traj1'): 0.0304,
-    ('5.3', 'ccpi-hg-2p', 'err_400ft_m_traj1'): 1e-05,
-    ('5.3', 'kf-2p', 'err_400ft_m_traj1'): -0.0376,
-    ('5.3', 'oj-2p', 'err_400ft_m_traj1'): 0.0025,
-    ('5.3', 'cccs-2p', 'err_200ft_m_traj1'): 2e-05,
-    ('5.3', 'ii-2p', 'err_200ft_m_traj1'): 0.0122,
-    ('5.3', 'ccpi-hg-2p', 'err_200ft_m_traj1'): 1e-05,
-    ('5.3', 'kf-2p', 'err_200ft_m_traj1'): 0.0027,
-    ('5.3', 'oj-2p', 'err_200ft_m_traj1'): 0.001,
-    ('5.3', 'cccs-2p', 'err_100ft_m_traj1'): 2e-05,
-    ('5.3', 'ii-2p', 'err_100ft_m_traj1'): 0.002,
-    ('5.3', 'ccpi-hg-2p', 'err_100ft_m_traj1'): 1e-05,
-    ('5.3', 'kf-2p', 'err_100ft_m_traj1'): 5e-05,
-    ('5.3', 'oj-2p', 'err_100ft_m_traj1'): 0.0002,
-    ('5.3', 'cccs-2p', 'mean_err_100ft_m_all8'): 9.1e-05,
-    ('5.3', 'ii-2p', 'mean_err_100ft_m_all8'): 0.007,
-    ('5.3', 'ccpi-hg-2p', 'mean_err_100ft_m_all8'): 5.9e-05,
-    ('5.3', 'kf-2p', 'mean_err_100ft_m_all8'): 0.00052,
-    ('5.3', 'oj-2p', 'mean_err_100ft_m_all8'): 0.00293,
-    ('5.3', 'cccs-2p', 'std_err_100ft_m_all8'): 3.4e-05,
-    ('5.3', 'ii-2p', 'std_err_100ft_m_all8'): 0.00254,
-    ('5.3', 'ccpi-hg-2p', 'std_err_100ft_m_all8'): 2.2e-05,
-    ('5.3', 'kf-2p', 'std_err_100ft_m_all8'): 0.000261,
-    ('5.3', 'oj-2p', 'std_err_100ft_m_all8'): 0.00105,
-    ('5.4', 'cccj-2l', 'conv_time_5pct_s_traj1'): 2.04,
-    ('5.4', 'ii-2l', 'conv_time_5pct_s_traj1'): 6.0,
-    ('5.4', 'ccpi-2l', 'conv_time_5pct_s_traj1'): 2.04,
-    ('5.4', 'ekf-2l', 'conv_time_5pct_s_traj1'): 3.4,
-    ('5.4', 'oj-2l', 'conv_time_5pct_s_traj1'): 5.52,
-    ('5.4', 'cccj-2l', 'err_400ft_m_traj1'): -7e-05,
-    ('5.4', 'ii-2l', 'err_400ft_m_traj1'): -0.0651,
-    ('5.4', 'ccpi-2l', 'err_400ft_m_traj1'): -7e-05,
-    ('5.4', 'ekf-2l', 'err_400ft_m_traj1'): 6e-07,
-    ('5.4', 'oj-2l', 'err_400ft_m_traj1'): 0.0044,
-    ('5.4', 'cccj-2l', 'err_200ft_m_traj1'): -7e-05,
-    ('5.4', 'ii-2l', 'err_200ft_m_traj1'): -0.051,
-    ('5.4', 'ccpi-2l', 'err_200ft_m_traj1'): -6e-05,
-    ('5.4', 'ekf-2l', 'err_200ft_m_traj1'): -1e-05,
-    ('5.4', 'oj-2l', 'err_200ft_m_traj1'): 0.003,
-    ('5.4', 'cccj-2l', 'err_100ft_m_traj1'): -0.00043,
-    ('5.4', 'ii-2l', 'err_100ft_m_traj1'): -0.0381,
-    ('5.4', 'ccpi-2l', 'err_100ft_m_traj1'): -0.00045,
-    ('5.4', 'ekf-2l', 'err_100ft_m_traj1'): -1e-05,
-    ('5.4', 'oj-2l', 'err_100ft_m_traj1'): 0.0019,
-    ('5.4', 'cccj-2l', 'mean_err_100ft_m_all8'): -0.00064,
-    ('5.4', 'ii-2l', 'mean_err_100ft_m_all8'): -0.0422,
-    ('5.4', 'ccpi-2l', 'mean_err_100ft_m_all8'): -0.00054,
-    ('5.4', 'ekf-2l', 'mean_err_100ft_m_all8'): -2e-05,
-    ('5.4', 'oj-2l', 'mean_err_100ft_m_all8'): 0.00512,
-    ('5.4', 'cccj-2l', 'std_err_100ft_m_all8'): 0.00042,
-    ('5.4', 'ii-2l', 'std_err_100ft_m_all8'): 0.0119,
-    ('5.4', 'ccpi-2l', 'std_err_100ft_m_all8'): 0.00032,
-    ('5.4', 'ekf-2l', 'std_err_100ft_m_all8'): 5.1e-05,
-    ('5.4', 'oj-2l', 'std_err_100ft_m_all8'): 0.0042,
-    ('5.6', 'cccs-2p', 'conv_time_5pct_s_traj1'): 5.64,
-    ('5.6', 'ii-2p', 'conv_time_5pct_s_traj1'): 4.62,
-    ('5.6', 'ccpi-hg-2p', 'conv_time_5pct_s_traj1'): 5.83,
-    ('5.6', 'kf-2p', 'conv_time_5pct_s_traj1'): 8.88,
-    ('5.6', 'oj-2p', 'conv_time_5pct_s_traj1'): 4.51,
-    ('5.6', 'cccs-2p', 'err_400ft_m_traj1'): -4.5497,
-    ('5.6', 'ii-2p', 'err_400ft_m_traj1'): -2.0658,
-    ('5.6', 'ccpi-hg-2p', 'err_400ft_m_traj1'): -6.1689,
-    ('5.6', 'kf-2p', 'err_400ft_m_traj1'): -1.7701,
-    ('5.6', 'oj-2p', 'err_400ft_m_traj1'): -5.1983,
-    ('5.6', 'cccs-2p', 'err_200ft_m_traj1'): 0.1456,
-    ('5.6', 'ii-2p', 'err_200ft_m_traj1'): -0.6692,
-    ('5.6', 'ccpi-hg-2p', 'err_200ft_m_traj1'): 0.0905,
-    ('5.6', 'kf-2p', 'err_200ft_m_traj1'): 0.0152,
-    ('5.6', 'oj-2p', 'err_200ft_m_traj1'): -2.6657,
-    ('5.6', 'cccs-2p', 'err_100ft_m_traj1'): 0.1068,
-    ('5.6', 'ii-2p', 'err_100ft_m_traj1'): -0.1466,
-    ('5.6', 'ccpi-hg-2p', 'err_100ft_m_traj1'): 0.1262,
-    ('5.6', 'kf-2p', 'err_100ft_m_traj1'): 0.0866,
-    ('5.6', 'oj-2p', 'err_100ft_m_traj1'): -0.3659,
-    ('5.6', 'cccs-2p', 'mean_err_100ft_m_all8'): 0.1874,
-    ('5.6', 'ii-2p', 'mean_err_100ft_m_all8'): -0.2413,
-    ('5.6', 'ccpi-hg-2p', 'mean_err_100ft_m_all8'): 0.0991,
-    ('5.6', 'kf-2p', 'mean_err_100ft_m_all8'): 0.0969,
-    ('5.6', 'oj-2p', 'mean_err_100ft_m_all8'): -0.6772,
-    ('5.6', 'cccs-2p', 'std_err_100ft_m_all8'): 0.061,
-    ('5.6', 'ii-2p', 'std_err_100ft_m_all8'): 0.2135,
-    ('5.6', 'ccpi-hg-2p', 'std_err_100ft_m_all8'): 0.0456,
-    ('5.6', 'kf-2p', 'std_err_100ft_m_all8'): 0.0451,
-    ('5.6', 'oj-2p', 'std_err_100ft_m_all8'): 0.499,
-    ('5.7', 'cccs-2p', 'conv_time_5pct_s_traj1'): 11.04,
-    ('5.7', 'ii-2p', 'conv_time_5pct_s_traj1'): 12.12,
-    ('5.7', 'ccpi-hg-2p', 'conv_time_5pct_s_traj1'): 11.08,
-    ('5.7', 'kf-2p', 'conv_time_5pct_s_traj1'): 16.12,
-    ('5.7', 'oj-2p', 'conv_time_5pct_s_traj1'): 56.56,
-    ('5.7', 'cccs-2p', 'err_400ft_m_traj1'): 2.8025,
-    ('5.7', 'ii-2p', 'err_400ft_m_traj1'): -1.2481,
-    ('5.7', 'ccpi-hg-2p', 'err_400ft_m_traj1'): -1.975,
-    ('5.7', 'kf-2p', 'err_400ft_m_traj1'): -7.4605,
-    ('5.7', 'oj-2p', 'err_400ft_m_traj1'): -36.26,
-    ('5.7', 'cccs-2p', 'err_200ft_m_traj1'): 3.0019,
-    ('5.7', 'ii-2p', 'err_200ft_m_traj1'): 0.90507,
-    ('5.7', 'ccpi-hg-2p', 'err_200ft_m_traj1'): -2.2112,
-    ('5.7', 'kf-2p', 'err_200ft_m_traj1'): -0.29642,
-    ('5.7', 'oj-2p', 'err_200ft_m_traj1'): -1.7786,
-    ('5.7', 'cccs-2p', 'err_100ft_m_traj1'): 2.9137,
-    ('5.7', 'ii-2p', 'err_100ft_m_traj1'): 1.0192,
-    ('5.7', 'ccpi-hg-2p', 'err_100ft_m_traj1'): -1.1976,
-    ('5.7', 'kf-2p', 'err_100ft_m_traj1'): 0.11233,
-    ('5.7', 'oj-2p', 'err_100ft_m_traj1'): 0.70278,
-    ('5.7', 'cccs-2p', 'mean_err_100ft_m_all8'): 4.124,
-    ('5.7', 'ii-2p', 'mean_err_100ft_m_all8'): 3.418,
-    ('5.7', 'ccpi-hg-2p', 'mean_err_100ft_m_all8'): -3.7854,
-    ('5.7', 'kf-2p', 'mean_err_100ft_m_all8'): 1.0213,
-    ('5.7', 'oj-2p', 'mean_err_100ft_m_all8'): 2.7541,
-    ('5.7', 'cccs-2p', 'std_err_100ft_m_all8'): 2.7541,
-    ('5.7', 'ii-2p', 'std_err_100ft_m_all8'): 3.2212,
-    ('5.7', 'ccpi-hg-2p', 'std_err_100ft_m_all8'): 2.6548,
-    ('5.7', 'kf-2p', 'std_err_100ft_m_all8'): 1.002,
-    ('5.7', 'oj-2p', 'std_err_100ft_m_all8'): 1.7849,
-    ('5.8', 'cccs-2p', 'std_err_along_traj1_m_1px'): 12.86,
-    ('5.8', 'ii-2p', 'std_err_along_traj1_m_1px'): 21.21,
-    ('5.8', 'ccpi-hg-2p', 'std_err_along_traj1_m_1px'): 12.94,
-    ('5.8', 'kf-2p', 'std_err_along_traj1_m_1px'): 14.05,
-    ('5.8', 'oj-2p', 'std_err_along_traj1_m_1px'): 13.08,
-    ('5.8', 'cccs-2p', 'std_err_along_traj1_m_5px'): 30.49,
-    ('5.8', 'ii-2p', 'std_err_along_traj1_m_5px'): 80.89,
-    ('5.8', 'ccpi-hg-2p', 'std_err_along_traj1_m_5px'): 31.17,
-    ('5.8', 'kf-2p', 'std_err_along_traj1_m_5px'): 22.04,
-    ('5.8', 'oj-2p', 'std_err_along_traj1_m_5px'): 39.22,
-    ('5.10', 'cccs-2p', 'conv_time_5pct_s_traj1'): 14.88,
-    ('5.10', 'ii-2p', 'conv_time_5pct_s_traj1'): 37.0,
-    ('5.10', 'ccpi-hg-2p', 'conv_time_5pct_s_traj1'): 8.2,
-    ('5.10', 'kf-2p', 'conv_time_5pct_s_traj1'): 19.32,
-    ('5.10', 'oj-2p', 'conv_time_5pct_s_traj1'): 12.24,
-    ('5.10', 'cccs-2p', 'err_400ft_m_traj1'): 0.1457,
-    ('5.10', 'ii-2p', 'err_400ft_m_traj1'): -4.0984,
-    ('5.10', 'ccpi-hg-2p', 'err_400ft_m_traj1'): 0.1445,
-    ('5.10', 'kf-2p', 'err_400ft_m_traj1'): -2.7846,
-    ('5.10', 'oj-2p', 'err_400ft_m_traj1'): -3.7847,
-    ('5.10', 'cccs-2p', 'err_200ft_m_traj1'): 0.1053,
-    ('5.10', 'ii-2p', 'err_200ft_m_traj1'): -2.6341,
-    ('5.10', 'ccpi-hg-2p', 'err_200ft_m_traj1'): 0.1035,
-    ('5.10', 'kf-2p', 'err_200ft_m_traj1'): 0.0681,
-    ('5.10', 'oj-2p', 'err_200ft_m_traj1'): -1.5785,
-    ('5.10', 'cccs-2p', 'err_100ft_m_traj1'): 0.08035,
-    ('5.10', 'ii-2p', 'err_100ft_m_traj1'): -1.1621,
-    ('5.10', 'ccpi-hg-2p', 'err_100ft_m_traj1'): 0.08152,
-    ('5.10', 'kf-2p', 'err_100ft_m_traj1'): 0.0679,
-    ('5.10', 'oj-2p', 'err_100ft_m_traj1'): -0.2217,
-    ('5.10', 'cccs-2p', 'mean_err_100ft_m_all8'): 0.1044,
-    ('5.10', 'ii-2p', 'mean_err_100ft_m_all8'): -1.4254,
-    ('5.10', 'ccpi-hg-2p', 'mean_err_100ft_m_all8'): 0.1474,
-    ('5.10', 'kf-2p', 'mean_err_100ft_m_all8'): 0.0844,
-    ('5.10', 'oj-2p', 'mean_err_100ft_m_all8'): -0.3548,
-    ('5.10', 'cccs-2p', 'std_err_100ft_m_all8'): 0.02145,
-    ('5.10', 'ii-2p', 'std_err_100ft_m_all8'): 0.3545,
-    ('5.10', 'ccpi-hg-2p', 'std_err_100ft_m_all8'): 0.7146,
-    ('5.10', 'kf-2p', 'std_err_100ft_m_all8'): 0.0371,
-    ('5.10', 'oj-2p', 'std_err_100ft_m_all8'): 0.2842,
-    ('5.12', 'cccs-2p', 'conv_time_5pct_s_traj1'): 37.72,
-    ('5.12', 'ii-2p', 'conv_time_5pct_s_traj1'): 67.02,
-    ('5.12', 'ccpi-hg-2p', 'conv_time_5pct_s_traj1'): 5.96,
-    ('5.12', 'kf-2p', 'conv_time_5pct_s_traj1'): 7.84,
-    ('5.12', 'oj-2p', 'conv_time_5pct_s_traj1'): 9.04,
-    ('5.12', 'cccs-2p', 'err_400ft_m_traj1'): -1.8137,
-    ('5.12', 'ii-2p', 'err_400ft_m_traj1'): -34.128,
-    ('5.12', 'ccpi-hg-2p', 'err_400ft_m_traj1'): 6.7214,
-    ('5.12', 'kf-2p', 'err_400ft_m_traj1'): 6.3987,
-    ('5.12', 'oj-2p', 'err_400ft_m_traj1'): 6.2249,
-    ('5.12', 'cccs-2p', 'err_200ft_m_traj1'): 3.3942,
-    ('5.12', 'ii-2p', 'err_200ft_m_traj1'): -26.396,
-    ('5.12', 'ccpi-hg-2p', 'err_200ft_m_traj1'): 3.4194,
-    ('5.12', 'kf-2p', 'err_200ft_m_traj1'): 3.4136,
-    ('5.12', 'oj-2p', 'err_200ft_m_traj1'): 3.0836,
-    ('5.12', 'cccs-2p', 'err_100ft_m_traj1'): 1.7493,
-    ('5.12', 'ii-2p', 'err_100ft_m_traj1'): -16.0845,
-    ('5.12', 'ccpi-hg-2p', 'err_100ft_m_traj1'): 1.7485,
-    ('5.12', 'kf-2p', 'err_100ft_m_traj1'): 1.7466,
-    ('5.12', 'oj-2p', 'err_100ft_m_traj1'): 1.6076,
-    ('5.12', 'cccs-2p', 'mean_err_100ft_m_all8'): 4.5781,
-    ('5.12', 'ii-2p', 'mean_err_100ft_m_all8'): -22.7844,
-    ('5.12', 'ccpi-hg-2p', 'mean_err_100ft_m_all8'): 5.1488,
-    ('5.12', 'kf-2p', 'mean_err_100ft_m_all8'): 8.7841,
-    ('5.12', 'oj-2p', 'mean_err_100ft_m_all8'): 5.6448,
-    ('5.12', 'cccs-2p', 'std_err_100ft_m_all8'): 5.5441,
-    ('5.12', 'ii-2p', 'std_err_100ft_m_all8'): 15.4886,
-    ('5.12', 'ccpi-hg-2p', 'std_err_100ft_m_all8'): 4.1558,
-    ('5.12', 'kf-2p', 'std_err_100ft_m_all8'): 7.1548,
-    ('5.12', 'oj-2p', 'std_err_100ft_m_all8'): 6.7844,
-}
+#: table -> (condition, features), e.g. '5.6': ('1 px Gaussian noise', '2 points')
+THESIS_TABLES, THESIS_CONDITIONS = _read()
 
 
 def thesis_value(table: str, observer: str, metric: str) -> float | None:
