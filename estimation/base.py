@@ -30,7 +30,7 @@ from __future__ import annotations
 import abc
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -349,8 +349,3 @@ class Observer(abc.ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.params!r})"
-
-
-def params_fields(params: Any) -> dict:
-    """Parameters as a plain dictionary (for reports and metrics.json)."""
-    return params.to_dict() if isinstance(params, ObserverParams) else dict(params or {})

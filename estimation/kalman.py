@@ -90,8 +90,6 @@ class KF2P(_PointsObserver):
         J = np.array([y1, y[0, 1], y[1, 1], 1.0])
         sigma_z = p.initial_height_sigma_fraction * dh0_m
         kf.P = np.outer(J, J) * sigma_z ** 2 + np.eye(4) * 1.0
-        kf.F = np.eye(4)
-        kf.B = -np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
         self._kf = kf
         self._H = np.zeros((4, 4))
         self._H[0, 0] = self._H[2, 0] = -1.0
@@ -105,8 +103,11 @@ class KF2P(_PointsObserver):
         self._eta = 1.0 / dh0_m
 
     def _predict(self, d1, d2, d3, dt_s, v_old, v_new) -> None:
-        # filterpy's predict (x = F x + B u, P = F P F' + Q) written out for F = I: the same
-        # maths without four 4x4 products at every 50 Hz step; the update below is filterpy's
+        # the prediction x = F x + B u, P = F P F' + Q with F = I, u = (d1, d2, d3) the camera's
+        # displacement in the runway frame and B = -[[1,0,0], [0,1,0], [0,1,0], [0,0,1]] (both
+        # corners share the threshold's x and z), Q = (velocity_sigma_mps dt)^2 I, written out
+        # here rather than through filterpy's predict (four 4x4 products at every 50 Hz step);
+        # the update below is filterpy's
         kf = self._kf
         x = kf.x
         x[0] -= d1

@@ -87,8 +87,8 @@ def _heun(y, eta: float, u0: tuple, u1: tuple, dt: float) -> tuple:
 def _pair_jacobian(y, eta: float, u: tuple) -> tuple:
     """``Phi`` (4,), ``D = d(y')/dy`` (4, 4) and ``dPhi/dy`` (4, 4) at ``(y, eta)`` as numpy arrays.
 
-    Both matrices are block diagonal (one 2x2 block per edge). Used by the EKF and the tests;
-    the coordinate-change observers work on the blocks directly (:func:`_edge_blocks`).
+    Both matrices are block diagonal (one 2x2 block per edge). Used by :func:`cccj_jacobian`
+    and the tests; the observers, EKF included, work on the blocks directly (:func:`_edge_blocks`).
     """
     phi = np.empty(4)
     D = np.zeros((4, 4))
