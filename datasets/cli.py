@@ -113,8 +113,9 @@ def register(subparsers):
 
     p = subparsers.add_parser(
         "compare", help="thesis-style tables (Tables 5.14-5.17) across processed runs",
-        description="Compare observers and measurement sources across 'visland process' runs: 5 %% convergence "
-                    "time and errors at 400/200/100 ft on scenario 1, mean and standard deviation at 100 ft over "
+        description="Compare observers and measurement sources across 'visland process' runs: 5 % convergence "
+                    "time (the thesis's, sustained until 100 ft, and the strict one to the last frame; "
+                    "definitions in compare.md) and errors at 400/200/100 ft on scenario 1, mean and standard deviation at 100 ft over "
                     "all runs, for dH, dY and dX; writes compare.md, compare.json, compare.csv and plots; ends "
                     "with one JSON line.")
     p.add_argument("runs", nargs="+", metavar="RUN", help="output folders of 'visland process'")

@@ -12,7 +12,7 @@ observer:
 
 Every figure comes from :mod:`visland.estimation.metrics` (the one home of the definitions,
 written under the tables), measured from each observer's start as recorded in the run's
-``metrics.json``, so ``compare`` and ``metrics.json`` agree to the digit.
+``metrics.json``, so ``compare`` and ``metrics.json`` agree (to the rounding of estimates.csv).
 
 Writes ``compare.md`` (the tables), ``compare.json`` (every figure), ``compare.csv`` (tidy:
 source, observer, run, quantity, metric, value) and plots into ``--out``, prints the tables,

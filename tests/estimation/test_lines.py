@@ -28,6 +28,7 @@ from scipy.spatial.transform import Rotation
 from visland.estimation.base import Estimate, ObserverInput
 from visland.estimation.lines import (CCCJ2L, CCCJ2LParams, CCPI2L, CCPI2LParams, EKF2L, EKF2LParams, II2L,
                                       II2LParams, LINE_OBSERVERS, OJ2L, OJ2LParams)
+from visland.estimation.metrics import convergence_time_s
 from visland.features import batch_R_camera_from_runway, batch_R_runway_from_body, observability_lines
 from visland.scenarios import get_scenario
 from visland.simulate import run_simulation
@@ -94,12 +95,10 @@ def fly(observer, tr, inputs, dh0_factor=1.2) -> list[Estimate]:
 
 
 def convergence_time(tr, dh_est, band=0.05) -> float:
-    """Time after which |dH - estimate| stays below ``band`` dH (thesis 5.2.1); inf if it never does."""
-    truth = tr.dh_m[1:1 + len(dh_est)]
-    bad = np.nonzero(np.abs(truth - dh_est) > band * truth)[0]
-    if not bad.size:
-        return 0.0
-    return float(tr.t_s[bad[-1] + 2]) if bad[-1] + 1 < len(dh_est) else math.inf
+    """The thesis's 5 % convergence time (visland.estimation.metrics, thesis 5.2.1) of the estimates
+    of steps 1.. from the start at step 0; NaN if it never stays within the band."""
+    n = len(dh_est)
+    return convergence_time_s(tr.t_s[1:1 + n], tr.dh_m[1:1 + n], dh_est, tolerance=band, start_t_s=tr.t_s[0])
 
 
 def error_at_height(tr, dh_est, height_ft) -> float:
