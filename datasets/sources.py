@@ -117,7 +117,8 @@ class VideoSource(FrameSource):
             raise ValueError(f"{camera_path}: camera file not found (give --camera FILE)")
         telemetry_path = Path(telemetry) if telemetry else here / "telemetry.csv"
         if not telemetry_path.exists():
-            raise ValueError(f"{telemetry_path}: telemetry file not found (give --telemetry FILE)")
+            raise ValueError(f"{telemetry_path}: telemetry file not found; estimation needs inertial data (give "
+                             "--telemetry FILE), and `visland detect` finds the runway in frames alone")
         self.telemetry = read_telemetry(telemetry_path)
         self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(telemetry_path))
         truth = here / "truth.csv"

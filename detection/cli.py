@@ -23,7 +23,10 @@ def _cmd_detect(args) -> int:
         raise ValueError(f"{out}: is a folder; --out names the measurements CSV file to write")
     params = _load_params(args.params)
     folder = FrameFolder(args.dir, camera=args.camera, telemetry=args.telemetry, frames_csv=args.frames_csv,
-                         fps=args.fps)
+                         fps=args.fps, require_telemetry=False)
+    if folder.inertial is None:
+        print(f"no telemetry ({args.telemetry or Path(args.dir) / 'telemetry.csv'} not found): roll and pitch are "
+              "read off each frame (its horizon, then the runway's vanishing point)")
     result = detect_folder(folder, params, progress=not args.quiet, max_frames=args.max_frames)
     write_measurements(result, out)
     print(result.summary())
@@ -55,7 +58,7 @@ def register(subparsers):
         "detect", help="detect the runway in a frame folder; write measurements.csv",
         description="Detect the runway (edges, centre line, threshold and far corners, d_F and the heading "
                     "deviation) in every frame of a folder in the SPEC contract (frames/, frames.csv or --fps, "
-                    "telemetry.csv for the horizon, camera.json). Each frame is tracked from the previous "
+                    "telemetry.csv for the horizon (without it the horizon is read off the frames), camera.json). Each frame is tracked from the previous "
                     "detection in a region of interest; the whole frame is searched to acquire or re-acquire. "
                     "Writes measurements.csv in the labels schema with source=detection, found, reason and "
                     "confidence; unusable frames are rows with found=0 and the reason.")
@@ -63,7 +66,8 @@ def register(subparsers):
     p.add_argument("--out", required=True, metavar="FILE", help="measurements CSV to write (refused if it exists)")
     p.add_argument("--params", metavar="FILE", help="detector parameters, JSON or TOML (visland.detection.DetectorParams)")
     p.add_argument("--camera", metavar="FILE", help="camera.json (default DIR/camera.json)")
-    p.add_argument("--telemetry", metavar="FILE", help="telemetry.csv (default DIR/telemetry.csv)")
+    p.add_argument("--telemetry", metavar="FILE", help="telemetry.csv (default DIR/telemetry.csv; without one, roll "
+                                                       "and pitch are read off each frame)")
     p.add_argument("--frames-csv", metavar="FILE", help="frame,t_s times (default DIR/frames.csv, else --fps)")
     p.add_argument("--fps", type=float, default=None, help="frame rate when there is no frames.csv (default 25)")
     p.add_argument("--max-frames", type=int, default=None, metavar="N", help="only the first N frames")

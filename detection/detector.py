@@ -37,7 +37,8 @@ from visland.detection.result import DetectionResult, not_found
 from visland.detection.transverse import find_transverse_line, surface_extent
 from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
-from visland.folder import as_grey, pinhole_frame
+from visland.folder import as_grey, ignored_pixels, scene_frame
+from visland.runway import CORNER_NAMES
 
 __all__ = ["detect_runway", "check_frame"]
 
@@ -64,8 +65,10 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     ----------
     image : ndarray of uint8, shape (H, W) or (H, W, 3)
         The frame as the camera took it, grey levels or RGB; its size must be the camera's.
-        With a lens distortion in ``camera`` it is resampled to the pinhole image first
-        (:func:`visland.folder.pinhole_frame`); every feature is in pinhole pixels. Everything runs on grey
+        With a lens distortion in ``camera`` it is resampled to the pinhole image first, and
+        the aircraft's structure (``camera.mask``) is filled from the scene around it
+        (:func:`visland.folder.scene_frame`); every feature is in pinhole pixels, and a corner
+        that falls on the structure is withheld. Everything runs on grey
         levels; colour adds the chroma profile that places the threshold and the runway end
         where grass meets grey pavement (:mod:`visland.detection.transverse`).
     camera : CameraModel
@@ -104,8 +107,8 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     if problem:
         return fail(problem)
     # features are measured in the pinhole image (SPEC): a frame through a distorting lens is
-    # resampled first
-    image = pinhole_frame(image, camera)
+    # resampled first; the aircraft's structure never reaches the search
+    image = scene_frame(image, camera)
     colour = None
     if image.ndim == 3:
         colour, image = image, as_grey(image)
@@ -134,7 +137,30 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
         # a degenerate configuration the geometry cannot handle (e.g. lines meeting at
         # infinity) is a frame without a detection, never an exception for the caller
         return fail(f"detector failed on this frame ({type(error).__name__}: {error})")
-    return result if result is not None else fail(why)
+    if result is None:
+        return fail(why)
+    return _withhold_hidden_corners(result, camera)
+
+
+def _withhold_hidden_corners(result: DetectionResult, camera: CameraModel) -> DetectionResult:
+    """Corners that fall on the aircraft's structure (or outside the lens) are not seen: their
+    position would be an extrapolation of edges behind the mask, so they are withheld."""
+    ignored = ignored_pixels(camera)
+    if ignored is None or not result.found:
+        return result
+    corners = np.asarray(result.corners_uv, float)
+    found = np.asarray(result.corners_found, bool).copy()
+    hidden = []
+    for k in np.nonzero(found)[0]:
+        u, v = (int(round(c)) for c in corners[k])
+        if 0 <= v < ignored.shape[0] and 0 <= u < ignored.shape[1] and ignored[v, u]:
+            found[k] = False
+            hidden.append(CORNER_NAMES[k])
+    if not hidden:
+        return result
+    corners[~found] = np.nan
+    reason = "; ".join(r for r in (result.reason, f"{', '.join(hidden)} hidden by the aircraft's structure") if r)
+    return replace(result, corners_uv=corners, corners_found=found, reason=reason)
 
 
 def _search_frame(context: "_Context", previous: DetectionResult | None, ground):

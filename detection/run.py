@@ -61,8 +61,11 @@ def detect_folder(folder, params: DetectorParams | None = None, progress: bool =
             out.n_unusable += 1
         else:
             tic = time.perf_counter()
-            result = sequence(image, float(folder.inertial.roll_rad[index]), float(folder.inertial.pitch_rad[index]),
-                              t_s)
+            if folder.inertial is None:      # no telemetry: the horizon is read off the frame
+                roll, pitch = None, None
+            else:
+                roll, pitch = float(folder.inertial.roll_rad[index]), float(folder.inertial.pitch_rad[index])
+            result = sequence(image, roll, pitch, t_s)
             out.analysis_s += time.perf_counter() - tic
         if result.found:
             out.n_found += 1

@@ -20,6 +20,11 @@ followed as a track: at a steady ground speed the reciprocal of its width in pix
 or a pavement joining the runway taken for it) has its corners withheld, and three rejections in
 a row that agree with each other start the track afresh. After ``hold_s`` without a good
 detection the next search starts afresh.
+
+Without attitude data (``roll_rad`` and ``pitch_rad`` None: footage with no telemetry), the
+horizon is read off each frame (:func:`visland.detection.attitude.attitude_from_image`: the
+sky-ground step), then moved through the runway's vanishing point once the runway is found (the
+edges' crossing, which lies on the true horizon); that correction is carried to the next frames.
 """
 from __future__ import annotations
 
@@ -29,11 +34,16 @@ from dataclasses import replace
 import numpy as np
 
 from visland.camera import CameraModel
+from visland.detection.attitude import ImageAttitude, attitude_from_image
 from visland.detection.detector import detect_runway
 from visland.detection.params import DetectorParams
 from visland.detection.result import DetectionResult, not_found
 
 __all__ = ["DetectionSequence"]
+
+#: One-sigma error of the horizon read off the sky-ground step before the runway's vanishing
+#: point places it (degrees; measured 0.00-0.23 deg on the ray-cast airport, hazes 6-20 km).
+IMAGE_HORIZON_SIGMA_DEG = 0.15
 
 
 class DetectionSequence:
@@ -57,6 +67,7 @@ class DetectionSequence:
         self.t_good_s: float | None = None
         self.threshold_track: list[tuple[float, float]] = []      # (t_s, width_px) accepted
         self.threshold_rejected: list[tuple[float, float]] = []   # rejected in a row
+        self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
 
     def reset(self) -> None:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
@@ -64,14 +75,23 @@ class DetectionSequence:
         self.t_good_s = None
         self.threshold_track = []
         self.threshold_rejected = []
+        self.image_attitude = None
 
-    def __call__(self, image, roll_rad: float, pitch_rad: float, t_s: float) -> DetectionResult:
-        """Detect the runway in the frame at ``t_s`` (seconds, increasing)."""
+    def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float) -> DetectionResult:
+        """Detect the runway in the frame at ``t_s`` (seconds, increasing).
+
+        ``roll_rad``, ``pitch_rad``: the inertial attitude at the frame's time, or both None to
+        read the horizon off the frame (module docstring).
+        """
         prior = self.last_good
         dt = math.inf if self.t_good_s is None else float(t_s) - self.t_good_s
         if prior is not None and not 0.0 < dt <= self.params.hold_s:
             prior = None
-        result = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params, previous=prior)
+        if roll_rad is None or pitch_rad is None:
+            result = self._detect_without_attitude(image, prior)
+            roll_rad, pitch_rad = result.roll_rad, result.pitch_rad
+        else:
+            result = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params, previous=prior)
         if result.found and prior is not None and result.mode != "tracking":
             why = self._inconsistency(result, prior, dt)
             if why:
@@ -85,6 +105,40 @@ class DetectionSequence:
         if result.found:
             self.last_good = result
             self.t_good_s = float(t_s)
+        return result
+
+    def _detect_without_attitude(self, image, prior: DetectionResult | None) -> DetectionResult:
+        """The horizon from the frame, moved through the runway's vanishing point when found."""
+        from visland.folder import as_grey, ignored_pixels, scene_frame
+        from visland.detection.detector import check_frame
+        problem = check_frame(image, self.camera)
+        if problem:
+            return not_found(problem)
+        grey = as_grey(scene_frame(image, self.camera))
+        attitude = attitude_from_image(grey, self.camera, ignored_pixels(self.camera), self.image_attitude)
+        if isinstance(attitude, str):
+            return not_found(f"no attitude data and {attitude}")
+        params = self.params
+        if attitude.method == "sky":
+            # the visible horizon is up to a few tenths of a degree below the true one (haze):
+            # until the runway's vanishing point has placed it, edges meet it that loosely
+            f = self.camera.fy
+            params = replace(params, horizon_sigma_px=max(params.horizon_sigma_px, f * math.radians(IMAGE_HORIZON_SIGMA_DEG)),
+                             vp_tolerance_px=max(params.vp_tolerance_px, f * math.radians(2 * IMAGE_HORIZON_SIGMA_DEG)))
+        result = detect_runway(image, self.camera, attitude.roll_rad, attitude.pitch_rad, params=params,
+                               previous=prior)
+        vp = _edges_crossing(result, self.camera)
+        if vp is None:
+            self.image_attitude = attitude if self.image_attitude is None else self.image_attitude
+            return result
+        corrected = attitude.through_point(self.camera, vp)
+        self.image_attitude = corrected
+        if abs(corrected.visible_offset_px - attitude.visible_offset_px) > 0.5:
+            # the horizon moved: measure again on the right one
+            again = detect_runway(image, self.camera, corrected.roll_rad, corrected.pitch_rad, params=self.params,
+                                  previous=prior)
+            if again.found:
+                result = again
         return result
 
     def _check_threshold(self, result: DetectionResult, prior: DetectionResult, dt: float) -> DetectionResult:
@@ -160,6 +214,21 @@ class DetectionSequence:
             if jump > jump_limit:
                 return f"the vanishing point moved {jump:.0f} px along the horizon (> {jump_limit:.0f})"
         return ""
+
+
+def _edges_crossing(result: DetectionResult, camera: CameraModel):
+    """Pixel where the two detected edges cross (the runway's vanishing point), or None."""
+    if not result.found:
+        return None
+    from visland.camera import intersect_lines
+    (rho_l, theta_l), (rho_r, theta_r) = result.lines["left"], result.lines["right"]
+    if not all(math.isfinite(x) for x in (rho_l, theta_l, rho_r, theta_r)):
+        return None
+    xy = np.asarray(intersect_lines(rho_l, theta_l, rho_r, theta_r), float)
+    if not np.all(np.isfinite(xy)):
+        return None
+    uv = camera.normalized_to_pixels(xy)
+    return uv if camera.in_image(uv, margin_px=-max(camera.width, camera.height)) else None
 
 
 def _consistent(samples: list, params: DetectorParams) -> bool:

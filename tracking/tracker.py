@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from visland.camera import CameraModel
-from visland.folder import pinhole_frame
+from visland.folder import scene_frame
 from visland.runway import CORNER_NAMES
 from visland.tracking.anchoring import AnchorObservation
 from visland.tracking.motion import (Attitude, R_camera_from_level, rotation_homography,
@@ -693,8 +693,8 @@ class PointTracker:
                 raise ValueError(problem)
             return image, problem
         # points are tracked and reported in the pinhole image (SPEC): a frame through a
-        # distorting lens is resampled first
-        image = pinhole_frame(image, self.camera)
+        # distorting lens is resampled first, the aircraft's structure filled with the scene
+        image = scene_frame(image, self.camera)
         return image if strict else (image, "")
 
     def _require_started(self):

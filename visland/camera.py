@@ -20,9 +20,15 @@ Conventions (stated once here; SPEC.md "Conventions"):
   ``(u_d, v_d)`` of a frame corresponds to the pinhole pixel :meth:`CameraModel.undistort_pixels`
   gives, and a frame is turned into its pinhole image with :meth:`CameraModel.undistortion_maps`
   (for ``cv2.remap``). Without distortion the two images are the same.
+- The aircraft's own structure (optional, ``camera.json`` ``"mask"``): the pixels of the frame
+  *as taken* that show the windshield frame, a wiper, the nose or a reflection and must never
+  be read as scene. Either polygons ``[[[u, v], ...], ...]`` in pixels, or the name of an image
+  file beside ``camera.json`` (same size as the frames; non-zero = structure), such as the one
+  ``visland mask`` proposes. :meth:`CameraModel.structure_mask` gives it as a boolean image.
 """
 from __future__ import annotations
 
+import functools
 import json
 import math
 from dataclasses import dataclass, field, replace
@@ -72,6 +78,10 @@ class CameraModel:
         OpenCV radial-tangential coefficients ``(k1, k2, p1, p2, k3)`` of the lens, or None for
         a pinhole lens. Features are always expressed in the undistorted pinhole image (module
         docstring).
+    mask : tuple of polygons, str or None
+        The aircraft's own structure in the frame as taken (module docstring): polygons, each a
+        tuple of at least 3 ``(u, v)`` pixel vertices, or the absolute path of a mask image
+        (non-zero = structure). None: nothing masked.
     """
 
     width: int = DEFAULT_IMAGE_SIZE
@@ -83,6 +93,7 @@ class CameraModel:
     mount_rpy_rad: tuple = field(
         default=tuple(math.radians(a) for a in DEFAULT_MOUNT_RPY_DEG))
     distortion: tuple | None = None
+    mask: tuple | str | None = None
 
     def __post_init__(self):
         for name in ("width", "height"):
@@ -102,6 +113,7 @@ class CameraModel:
             raise ValueError(f"camera mount_rpy_rad must be 3 finite angles within +-pi, got {self.mount_rpy_rad!r}")
         object.__setattr__(self, "mount_rpy_rad", mount)
         object.__setattr__(self, "distortion", _checked_distortion(self.distortion, "camera distortion"))
+        object.__setattr__(self, "mask", _checked_mask(self.mask, "camera mask"))
         object.__setattr__(self, "width", int(self.width))
         object.__setattr__(self, "height", int(self.height))
         object.__setattr__(self, "fx", float(self.fx))
@@ -122,7 +134,7 @@ class CameraModel:
 
     @classmethod
     def from_fov(cls, width: int, height: int, hfov_deg: float,
-                 mount_rpy_deg=DEFAULT_MOUNT_RPY_DEG, distortion=None) -> "CameraModel":
+                 mount_rpy_deg=DEFAULT_MOUNT_RPY_DEG, distortion=None, mask=None) -> "CameraModel":
         """Square-pixel camera of a horizontal field of view ``hfov_deg`` (any frame shape).
 
         ``fx = fy = (width / 2) / tan(hfov / 2)``, principal point at the image centre.
@@ -134,7 +146,7 @@ class CameraModel:
                 raise ValueError(f"{name} must be an integer of at least 16 px, got {value!r}")
         focal = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
         return cls(int(width), int(height), focal, focal, (width - 1) / 2.0, (height - 1) / 2.0,
-                   tuple(math.radians(a) for a in mount_rpy_deg), distortion)
+                   tuple(math.radians(a) for a in mount_rpy_deg), distortion, mask)
 
     def with_mount(self, mount_rpy_rad) -> "CameraModel":
         """Same intrinsics and lens, another mounting (e.g. to apply a calibration error)."""
@@ -173,11 +185,20 @@ class CameraModel:
                 "cx": self.cx, "cy": self.cy, "mount_rpy_deg": list(self.mount_rpy_deg)}
         if self.distortion is not None:
             data["distortion"] = list(self.distortion)
+        if isinstance(self.mask, str):
+            data["mask"] = self.mask
+        elif self.mask is not None:
+            data["mask"] = [[list(vertex) for vertex in polygon] for polygon in self.mask]
         return data
 
     @classmethod
-    def from_json_dict(cls, data: dict, source: str = "camera.json") -> "CameraModel":
-        """Build from a ``camera.json`` dictionary; one clear error per missing/bad field."""
+    def from_json_dict(cls, data: dict, source: str = "camera.json", base_dir=None) -> "CameraModel":
+        """Build from a ``camera.json`` dictionary; one clear error per missing/bad field.
+
+        A mask image named in ``data["mask"]`` is looked for relative to ``base_dir`` (the
+        folder of the ``camera.json``; default the working directory) and checked now: it
+        must be readable, of the camera's size, and leave part of the image unmasked.
+        """
         if not isinstance(data, dict):
             raise ValueError(f"{source}: expected a JSON object, got {type(data).__name__}")
         required = ("width", "height", "fx", "fy", "cx", "cy", "mount_rpy_deg")
@@ -200,12 +221,24 @@ class CameraModel:
         distortion = data.get("distortion")
         if distortion is not None:
             distortion = _checked_distortion(distortion, f"{source}: field 'distortion'")
+        mask = data.get("mask")
+        if isinstance(mask, str):
+            mask_path = Path(mask) if Path(mask).is_absolute() else Path(base_dir or ".") / mask
+            mask = str(mask_path.resolve())
+        elif mask is not None:
+            mask = _checked_mask(mask, f"{source}: field 'mask'")
         try:
-            return cls(int(data["width"]), int(data["height"]), float(data["fx"]), float(data["fy"]),
-                       float(data["cx"]), float(data["cy"]), tuple(math.radians(a) for a in mount),
-                       distortion)
+            camera = cls(int(data["width"]), int(data["height"]), float(data["fx"]), float(data["fy"]),
+                         float(data["cx"]), float(data["cy"]), tuple(math.radians(a) for a in mount),
+                         distortion, mask)
         except ValueError as error:
             raise ValueError(f"{source}: {error}") from None
+        if camera.mask is not None:
+            try:
+                camera.structure_mask()
+            except ValueError as error:
+                raise ValueError(f"{source}: field 'mask': {error}") from None
+        return camera
 
     def save(self, path) -> None:
         Path(path).write_text(json.dumps(self.to_json_dict(), indent=2) + "\n")
@@ -219,7 +252,7 @@ class CameraModel:
             raise ValueError(f"{path}: camera file not found") from None
         except json.JSONDecodeError as error:
             raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
-        return cls.from_json_dict(data, source=str(path))
+        return cls.from_json_dict(data, source=str(path), base_dir=path.parent)
 
     # ----------------------------------------------------------------- points
     def normalized_to_pixels(self, xy) -> np.ndarray:
@@ -311,6 +344,17 @@ class CameraModel:
         uv_distorted = self.distort_pixels(np.stack([u, v], axis=-1))
         return uv_distorted[..., 0].astype(np.float32), uv_distorted[..., 1].astype(np.float32)
 
+    def structure_mask(self) -> np.ndarray | None:
+        """The aircraft's own structure as a boolean image ``(height, width)`` of the frame as
+        taken (True = never read as scene), or None without a mask.
+
+        Raises ``ValueError`` (one sentence naming the mask file) when the mask image cannot be
+        read, is not of the camera's size, or covers the whole image.
+        """
+        if self.mask is None:
+            return None
+        return _structure_mask(self.mask, self.width, self.height)
+
     def in_image(self, uv, margin_px: float = 0.0) -> np.ndarray:
         """True where pixel coordinates lie inside the image (``margin_px`` inside the border)."""
         uv = np.asarray(uv, dtype=float)
@@ -368,6 +412,63 @@ def _checked_distortion(value, what: str):
             raise ValueError(f"{what}: {name} = {c:g} is outside +-{limit:g} (not a lens distortion in "
                              f"OpenCV's normalised units; were pixel units or another model used?)")
     return coefficients
+
+
+def _checked_mask(value, what: str):
+    """Polygons as a tuple of tuples of ``(u, v)`` floats, a path as a non-empty string, or None."""
+    if value is None or (isinstance(value, str) and value):
+        return value
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)) or not value:
+        raise ValueError(f"{what} must be a list of polygons [[[u, v], ...], ...] or the name of a mask "
+                         f"image, got {value!r}"[:300])
+    polygons = []
+    for k, polygon in enumerate(value):
+        if not isinstance(polygon, (list, tuple)) or len(polygon) < 3:
+            raise ValueError(f"{what}: polygon {k} must be a list of at least 3 [u, v] vertices, got {polygon!r}"[:300])
+        vertices = []
+        for vertex in polygon:
+            if (not isinstance(vertex, (list, tuple)) or len(vertex) != 2
+                    or not all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
+                               for c in vertex)):
+                raise ValueError(f"{what}: polygon {k} has a vertex that is not two finite pixel coordinates: "
+                                 f"{vertex!r}"[:300])
+            vertices.append((float(vertex[0]), float(vertex[1])))
+        polygons.append(tuple(vertices))
+    return tuple(polygons)
+
+
+#: A mask leaving less than this fraction of the image is refused (nothing left to see).
+MASK_MAX_COVER = 0.98
+
+
+@functools.lru_cache(maxsize=8)
+def _structure_mask(mask, width: int, height: int) -> np.ndarray:
+    import cv2  # heavy import kept local: the core must start fast
+    if isinstance(mask, str):
+        path = Path(mask)
+        if not path.is_file():
+            raise ValueError(f"mask image {path} not found")
+        image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+        if image is None:
+            raise ValueError(f"mask image {path} cannot be read as an image")
+        if image.shape != (height, width):
+            raise ValueError(f"mask image {path} is {image.shape[1]}x{image.shape[0]} px, the camera's frames "
+                             f"are {width}x{height}")
+        structure = image > 0
+        name = f"mask image {path}"
+    else:
+        canvas = np.zeros((height, width), np.uint8)
+        # vertices in pixels with (0, 0) at the centre of the top-left pixel: fillPoly's integer
+        # grid is the same, with 4 fractional bits
+        polygons = [np.round(np.asarray(p, float) * 16).astype(np.int32) for p in mask]
+        cv2.fillPoly(canvas, polygons, 1, lineType=cv2.LINE_8, shift=4)
+        structure = canvas > 0
+        name = "mask polygons"
+    if structure.mean() > MASK_MAX_COVER:
+        raise ValueError(f"{name} cover {100 * structure.mean():.1f} % of the image: nothing would be left to "
+                         "see (non-zero pixels are the aircraft's structure)")
+    structure.setflags(write=False)
+    return structure
 
 
 def wrap_line_chart(rho, theta_rad) -> tuple[np.ndarray, np.ndarray]:

@@ -24,7 +24,7 @@ import numpy as np
 from visland.camera import CameraModel
 from visland.contracts import Table, read_frames_csv, read_labels, read_telemetry, read_truth
 
-__all__ = ["FrameFolder", "InertialAtFrames", "IMAGE_SUFFIXES", "as_grey", "pinhole_frame", "interpolate_telemetry",
+__all__ = ["FrameFolder", "InertialAtFrames", "IMAGE_SUFFIXES", "as_grey", "pinhole_frame", "scene_frame", "ignored_pixels", "interpolate_telemetry",
            "list_frame_files"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
@@ -133,7 +133,8 @@ class FrameFolder:
             self.telemetry = read_telemetry(telemetry_path)
             self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(telemetry_path))
         elif require_telemetry:
-            raise ValueError(f"{telemetry_path}: telemetry file not found (give --telemetry FILE)")
+            raise ValueError(f"{telemetry_path}: telemetry file not found; estimation needs inertial data (give "
+                             "--telemetry FILE), and `visland detect` finds the runway in frames alone")
         else:
             self.telemetry = None
             self.inertial = None
@@ -199,3 +200,70 @@ def pinhole_frame(image, camera: CameraModel):
     import cv2  # heavy import kept local: the core must start fast
     map_a, map_b = _undistortion_maps(camera)
     return cv2.remap(image, map_a, map_b, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+
+
+#: Pixels of the structure mask's edge are grown by this many pixels (blur and the lens's
+#: resampling spread the structure's outline beyond the drawn mask).
+MASK_GROWTH_PX = 3
+
+
+@functools.lru_cache(maxsize=4)
+def ignored_pixels(camera: CameraModel) -> np.ndarray | None:
+    """Pixels of the pinhole image that show no scene, as a read-only boolean image, or None.
+
+    The aircraft's structure (:meth:`CameraModel.structure_mask`, carried through the lens like
+    the frame) grown by :data:`MASK_GROWTH_PX`, and with a distorting lens the pinhole pixels
+    whose lens position falls outside the frame. None when every pixel shows the scene.
+    """
+    import cv2  # heavy import kept local: the core must start fast
+    ignored = np.zeros((camera.height, camera.width), bool)
+    structure = camera.structure_mask()
+    if structure is not None:
+        ignored |= pinhole_frame(structure.astype(np.uint8) * 255, camera) > 0
+    if camera.has_distortion:
+        map_u, map_v = camera.undistortion_maps()
+        ignored |= ((map_u < -0.5) | (map_u > camera.width - 0.5) | (map_v < -0.5) | (map_v > camera.height - 0.5))
+    if not ignored.any():
+        return None
+    kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * MASK_GROWTH_PX + 1,) * 2)
+    ignored = cv2.dilate(ignored.astype(np.uint8), kernel) > 0
+    ignored.setflags(write=False)
+    return ignored
+
+
+def scene_frame(image, camera: CameraModel):
+    """The pinhole frame (:func:`pinhole_frame`) with the pixels that show no scene
+    (:func:`ignored_pixels`: the aircraft's structure, outside the lens) filled smoothly from
+    the scene around them, so that no edge, line or texture of theirs reaches the detector or
+    the tracker.
+
+    The fill is a normalised convolution (the blurred scene divided by the blurred weight of
+    the scene pixels) on a coarse image, widened until every hole is reached: it continues the
+    surrounding grey levels without a step at the mask's outline, and carries no structure.
+    """
+    image = pinhole_frame(image, camera)
+    ignored = ignored_pixels(camera) if image is not None else None
+    if ignored is None:
+        return image
+    import cv2  # heavy import kept local: the core must start fast
+    height, width = ignored.shape
+    step = max(1, int(max(height, width) // 256))
+    small = cv2.resize(image, (width // step, height // step), interpolation=cv2.INTER_AREA).astype(np.float32)
+    weight = cv2.resize((~ignored).astype(np.float32), (width // step, height // step), interpolation=cv2.INTER_AREA)
+    weight = np.where(weight > 0.99, 1.0, 0.0).astype(np.float32)    # coarse pixels wholly in the scene
+    weighted = small * (weight[..., None] if small.ndim == 3 else weight)
+    fill = np.zeros_like(small)
+    done = np.zeros(weight.shape, bool)
+    sigma = 2.0
+    while not done.all() and sigma < 4 * max(weight.shape):
+        blur_w = cv2.GaussianBlur(weight, (0, 0), sigma)
+        blur_s = cv2.GaussianBlur(weighted, (0, 0), sigma)
+        reached = (blur_w > 1e-3) & ~done
+        denom = blur_w[..., None] if small.ndim == 3 else blur_w
+        fill[reached] = (blur_s / np.maximum(denom, 1e-6))[reached]
+        done |= reached
+        sigma *= 2.0
+    fill = cv2.resize(fill, (width, height), interpolation=cv2.INTER_LINEAR)
+    out = image.copy()
+    out[ignored] = np.clip(fill[ignored], 0, 255).astype(image.dtype)
+    return out

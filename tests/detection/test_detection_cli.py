@@ -75,3 +75,33 @@ def test_bench_detect_ends_with_a_json_line(folder, capsys):
     assert figures["target"] == "detect" and figures["frames"] == 2
     for key in ("acquisition_median_s", "tracking_median_ms", "tracking_fps", "tracking_found_rate"):
         assert figures[key] is not None
+
+
+def test_detect_without_telemetry_reads_the_horizon_off_the_frames(tmp_path, capsys):
+    """Cockpit footage with no telemetry.csv: `detect` reads roll and pitch off the frames and
+    masks the structure named in camera.json; `process` says estimation needs inertial data."""
+    from dataclasses import replace
+
+    from tests.helpers.cockpit_footage import cockpit_camera, cockpit_frames, structure_polygons
+    camera = cockpit_camera(640, 360)
+    folder = tmp_path / "footage"
+    (folder / "frames").mkdir(parents=True)
+    frames = list(cockpit_frames(camera, (1300.0, 1000.0), fps=2.0))[:3]
+    corners = []
+    for k, (_, image, corners_uv, _, _) in enumerate(frames):
+        cv2.imwrite(str(folder / "frames" / f"{k:04d}.png"), image)
+        corners.append(corners_uv)
+    replace(camera, mask=structure_polygons(640, 360)).save(folder / "camera.json")
+    out = tmp_path / "m.csv"
+    assert main(["detect", str(folder), "--out", str(out), "--fps", "2", "--quiet"]) == 0
+    assert "roll and pitch are read off each frame" in capsys.readouterr().out
+    rows = read_measurements(out)
+    assert rows["found"].sum() >= 2
+    for k in np.nonzero(rows["found"])[0]:
+        for c, name in enumerate(("near_left", "near_right")):
+            u, v = rows[f"{name}_u_px"][k], rows[f"{name}_v_px"][k]
+            if np.isfinite(u):
+                assert np.hypot(u - corners[k][c][0], v - corners[k][c][1]) < 3.0
+    assert main(["process", str(folder), "--out", str(tmp_path / "run"), "--fps", "2"]) == 2
+    error = capsys.readouterr().err
+    assert "estimation needs inertial data" in error and "visland detect" in error
