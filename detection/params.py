@@ -307,6 +307,19 @@ class DetectorParams(ParamsFile):
     max_vp_jump_px, max_vp_jump_rate_pxps : float
         Over a sequence: the same for the vanishing point's move along the horizon (d_F), in
         pixels of the reference image side.
+    identity_memory_s : float
+        Over a sequence: how long the runway's place on the ground relative to the camera (its
+        centre line's lateral offset over height, its width over height: the pencil slopes
+        ``k_C`` and ``k_R - k_L`` in the horizon frame, independent of attitude) is remembered
+        to check a re-acquisition after a loss longer than ``hold_s``.
+    identity_k_tolerance, identity_k_rate : float
+        A re-acquired runway whose centre line's ``k_C`` (lateral offset / height) differs from
+        the remembered one by more than ``identity_k_tolerance + identity_k_rate * dt`` plus 10 %
+        of it is another object parallel to the runway (a strip of fields, a taxiway): refused.
+    identity_width_tolerance, identity_width_rate : float
+        The same for the width over height ``k_R - k_L``, relative: more than
+        ``identity_width_tolerance + identity_width_rate * dt`` away (the height falls by about
+        2 % per second on the glide path at 800 ft, 7 % at 50 ft).
     max_threshold_jump_px, max_threshold_jump_fraction : float
         Over a sequence: threshold corners farther than ``max_threshold_jump_px +
         max_threshold_jump_fraction * threshold width`` per frame (at ``reference_rate_hz``)
@@ -452,6 +465,11 @@ class DetectorParams(ParamsFile):
     max_edge_turn_rate_rps: float = 0.3
     max_vp_jump_px: float = 60.0
     max_vp_jump_rate_pxps: float = 250.0
+    identity_memory_s: float = 10.0
+    identity_k_tolerance: float = 0.1
+    identity_k_rate: float = 0.05
+    identity_width_tolerance: float = 0.25
+    identity_width_rate: float = 0.05
     max_threshold_jump_px: float = 6.0
     max_threshold_jump_fraction: float = 0.12
     threshold_track_s: float = 2.0
@@ -518,6 +536,8 @@ class DetectorParams(ParamsFile):
         "max_edge_turn_rate_rps": (0.0, 100.0), "max_vp_jump_px": (0.0, 100000.0),
         "max_vp_jump_rate_pxps": (0.0, 1e6), "max_threshold_jump_px": (0.0, 100000.0),
         "max_threshold_jump_fraction": (0.0, 100.0), "threshold_track_s": (0.1, 60.0),
+        "identity_memory_s": (0.0, 600.0), "identity_k_tolerance": (0.0, 100.0), "identity_k_rate": (0.0, 100.0),
+        "identity_width_tolerance": (0.0, 100.0), "identity_width_rate": (0.0, 100.0),
         "threshold_width_tolerance_px": (0.0, 1000.0), "threshold_width_tolerance_fraction": (0.0, 10.0),
         "reference_rate_hz": (0.1, 10000.0),
         "reference_side_px": (16, 100000, "int"), "reference_focal_px": (1.0, 1e6),

@@ -21,6 +21,12 @@ or a pavement joining the runway taken for it) has its corners withheld, and thr
 a row that agree with each other start the track afresh. After ``hold_s`` without a good
 detection the next search starts afresh.
 
+A re-acquisition after a loss longer than ``hold_s`` is checked against where the runway was
+(for ``identity_memory_s``): its centre line's lateral offset over height and its width over
+height, read off the edges in the horizon frame, must be close to the remembered ones. Every
+ground line parallel to the runway shares its vanishing point, so a strip of fields or a taxiway
+beside it passes every single-frame test, but not this one.
+
 Without attitude data (``roll_rad`` and ``pitch_rad`` None: footage with no telemetry), the
 horizon is read off each frame (:func:`visland.detection.attitude.attitude_from_image`: the
 sky-ground step), then moved through the runway's vanishing point once the runway is found (the
@@ -36,6 +42,7 @@ import numpy as np
 from visland.camera import CameraModel
 from visland.detection.attitude import ImageAttitude, attitude_from_image
 from visland.detection.detector import detect_runway
+from visland.detection.horizon import horizon_frame
 from visland.detection.params import DetectorParams
 from visland.detection.result import DetectionResult, not_found
 
@@ -68,6 +75,7 @@ class DetectionSequence:
         self.threshold_track: list[tuple[float, float]] = []      # (t_s, width_px) accepted
         self.threshold_rejected: list[tuple[float, float]] = []   # rejected in a row
         self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
+        self.identity: tuple | None = None                        # (t_s, k_centre, width_ratio) last accepted
 
     def reset(self) -> None:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
@@ -76,6 +84,7 @@ class DetectionSequence:
         self.threshold_track = []
         self.threshold_rejected = []
         self.image_attitude = None
+        self.identity = None
 
     def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float) -> DetectionResult:
         """Detect the runway in the frame at ``t_s`` (seconds, increasing).
@@ -98,6 +107,8 @@ class DetectionSequence:
                 result = not_found(f"refused: {why} since the detection {dt:.2f} s earlier ({result.mode} "
                                    f"picked another object)", roll_rad=float(roll_rad), pitch_rad=float(pitch_rad),
                                    mode=result.mode, image_size=result.image_size, elapsed_s=result.elapsed_s)
+        if result.found and prior is None and self.identity is not None:
+            result = self._check_identity(result, image, roll_rad, pitch_rad, float(t_s))
         if result.found and prior is not None:
             result = self._check_threshold(result, prior, dt)
         if result.found:
@@ -105,7 +116,34 @@ class DetectionSequence:
         if result.found:
             self.last_good = result
             self.t_good_s = float(t_s)
+            geometry = _ground_geometry(result, self.camera)
+            if geometry is not None:
+                self.identity = (float(t_s),) + geometry
         return result
+
+    def _check_identity(self, result: DetectionResult, image, roll_rad, pitch_rad, t_s: float) -> DetectionResult:
+        """A re-acquisition after a loss longer than ``hold_s``: is it where the runway was?
+
+        Every ground line parallel to the runway meets the horizon at the same vanishing point,
+        so a strip of fields or a taxiway beside the runway passes every single-frame test; its
+        place relative to the camera does not (:class:`DetectorParams`, ``identity_*``). When it is refused, the last good detection is tried once more as the
+        prediction (tracking from it across the gap).
+        """
+        p = self.params
+        t_then, k_then, width_then = self.identity
+        dt = t_s - t_then
+        if dt > p.identity_memory_s:
+            return result
+        why = _identity_mismatch(result, self.camera, k_then, width_then, dt, p)
+        if not why:
+            return result
+        if self.last_good is not None and roll_rad is not None and math.isfinite(roll_rad):
+            again = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params, previous=self.last_good)
+            if again.found and not _identity_mismatch(again, self.camera, k_then, width_then, dt, p):
+                return again
+        return not_found(f"refused: {why} ({result.mode} picked another object parallel to the runway)",
+                         roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
+                         image_size=result.image_size, elapsed_s=result.elapsed_s)
 
     def _detect_without_attitude(self, image, prior: DetectionResult | None) -> DetectionResult:
         """The horizon from the frame, moved through the runway's vanishing point when found."""
@@ -214,6 +252,44 @@ class DetectionSequence:
             if jump > jump_limit:
                 return f"the vanishing point moved {jump:.0f} px along the horizon (> {jump_limit:.0f})"
         return ""
+
+
+def _ground_geometry(result: DetectionResult, camera: CameraModel):
+    """``(k_centre, width_ratio)``: the runway's centre line slope and its edges' slope difference
+    in the horizon frame (``s = s0 + k d``, :mod:`visland.detection.horizon`). For a ground line
+    at lateral distance ``Y`` from the camera at height ``h``, ``k = Y / h`` (up to the heading
+    deviation's cosine), so these are the runway's lateral offset and width over the height:
+    they change slowly over an approach whatever the attitude. None if not measurable."""
+    horizon = horizon_frame(camera, result.roll_rad, result.pitch_rad)
+    if horizon is None:
+        return None
+    slopes = []
+    for name in ("left", "right"):
+        segment = np.asarray(result.segments_uv.get(name, np.full((2, 2), np.nan)), float)
+        if not np.all(np.isfinite(segment)):
+            return None
+        _, k = horizon.pencil_from_points(segment[0], segment[1])
+        if not math.isfinite(float(k)):
+            return None
+        slopes.append(float(k))
+    return 0.5 * (slopes[0] + slopes[1]), abs(slopes[1] - slopes[0])
+
+
+def _identity_mismatch(result: DetectionResult, camera: CameraModel, k_then: float, width_then: float, dt: float,
+                       p: DetectorParams) -> str:
+    geometry = _ground_geometry(result, camera)
+    if geometry is None:
+        return ""
+    k_now, width_now = geometry
+    k_limit = p.identity_k_tolerance + p.identity_k_rate * dt + 0.1 * abs(k_then)
+    if abs(k_now - k_then) > k_limit:
+        return (f"its centre line lies at lateral offset / height {k_now:+.2f} where the runway seen {dt:.1f} s "
+                f"earlier was at {k_then:+.2f} (tolerance {k_limit:.2f})")
+    width_limit = p.identity_width_tolerance + p.identity_width_rate * dt
+    if width_then > 0 and abs(width_now / width_then - 1.0) > width_limit:
+        return (f"its width / height is {width_now:.3f} where the runway's was {width_then:.3f} {dt:.1f} s earlier "
+                f"(more than {100 * width_limit:.0f} % apart)")
+    return ""
 
 
 def _edges_crossing(result: DetectionResult, camera: CameraModel):

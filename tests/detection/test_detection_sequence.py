@@ -124,3 +124,54 @@ def test_a_new_track_replaces_a_wrong_one_after_three_agreeing_rejections(script
     withheld = [not r.corners_found[:2].any() for r in results]
     assert withheld[3] and withheld[4]            # off the old track ...
     assert not any(withheld[5:])                  # ... until three agreeing ones start a new one
+
+
+def _runway_result(states, i, runway, camera, lateral_shift_m=0.0):
+    """A found DetectionResult whose edges are the exact ones of ``runway`` shifted sideways
+    (a ground object parallel to the runway: same vanishing point)."""
+    from dataclasses import replace as _replace
+
+    import numpy as _np
+
+    from visland.detection.result import DetectionResult
+    from visland.features import ideal_features
+    shifted = states.at(states.t_s[i:i + 1])
+    shifted = _replace(shifted, p_runway_m=shifted.p_runway_m - _np.array([0.0, lateral_shift_m, 0.0]))
+    corners = ideal_features(shifted, runway, camera).corners_uv[0]
+    segments = {"left": _np.array([corners[2], corners[0]]), "right": _np.array([corners[3], corners[1]])}
+    return DetectionResult(found=True, reason="", confidence=0.9, segments_uv=segments,
+                           roll_rad=float(shifted.roll_rad[0]), pitch_rad=float(shifted.pitch_rad[0]))
+
+
+def test_the_runway_s_ground_geometry_tells_it_from_a_parallel_strip():
+    """k_C = lateral offset / height and k_R - k_L = width / height (horizon frame), read off
+    exact edges: the runway 2 s later matches, a strip 110 m beside it (same vanishing point,
+    same direction) and a narrower one on its axis do not."""
+    import math as _math
+
+    from visland.camera import CameraModel
+    from visland.detection.params import DetectorParams
+    from visland.detection.sequence import _ground_geometry, _identity_mismatch
+    from visland.flight import simulate_flight
+    from visland.runway import Runway
+    from visland.scenarios import get_scenario
+    scenario = get_scenario("thesis-1")
+    states = simulate_flight(scenario)
+    camera = CameraModel.from_fov(1920, 1080, 62.0, (0.0, -5.0, 0.0))
+    i = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 4400.0)))
+    j = i + int(round(2.0 / (states.t_s[1] - states.t_s[0])))
+    runway = scenario.runway
+    k_c, width = _ground_geometry(_runway_result(states, i, runway, camera), camera)
+    height = -states.p_runway_m[i, 2]
+    lateral = states.p_runway_m[i, 1]
+    dpsi = states.dpsi_rad[i]
+    assert width == pytest.approx(runway.width_m / height / _math.cos(dpsi), rel=0.02)
+    assert abs(k_c) == pytest.approx(abs(lateral) / height / _math.cos(dpsi), rel=0.05)
+    params = DetectorParams()
+    assert _identity_mismatch(_runway_result(states, j, runway, camera), camera, k_c, width, 2.0, params) == ""
+    beside = _identity_mismatch(_runway_result(states, j, runway, camera, 110.0), camera, k_c, width, 2.0, params)
+    assert "lateral offset / height" in beside
+    narrow = Runway(length_m=runway.length_m, width_m=20.0, aim_distance_m=runway.aim_distance_m,
+                    heading_deg=runway.heading_deg)
+    assert "width / height" in _identity_mismatch(_runway_result(states, j, narrow, camera), camera, k_c, width,
+                                                  2.0, params)
