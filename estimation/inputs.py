@@ -42,13 +42,13 @@ from visland.contracts import Table
 from visland.features import (batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF, horizon_line,
                               virtual_from_pixels)
 from visland.frames import wrap_pi
+from visland.sensors import TIME_MATCH_S, InertialSeries
 
 from visland.estimation.base import ObserverInput
 
 __all__ = ["InertialSeries", "FeatureSeries", "PreparedInputs", "prepare_inputs", "TIME_MATCH_S"]
 
 #: Frame times within this of a telemetry sample share its step.
-TIME_MATCH_S = 1e-6
 #: The runway-heading estimate is used once its standard error is under this (radians).
 HEADING_SETTLED_RAD = math.radians(1.0)
 #: The mounting's self-calibration corrects the steps once its roll and pitch standard deviations
@@ -59,82 +59,6 @@ CALIBRATION_MAX_WAIT_S = 30.0
 
 _NEAR_CORNERS = ("near_left", "near_right")
 _FAR_CORNERS = ("far_left", "far_right")
-
-
-@dataclass
-class InertialSeries:
-    """Inertial data at the unit's rate, SI units (radians, rad/s, m/s).
-
-    Attributes: ``t_s (n,)``, ``roll_rad``, ``pitch_rad``, ``heading_rad (n,)`` (unwrapped),
-    ``omega_body_rps (n, 3)`` body rates (p, q, r), ``v_ned_mps (n, 3)`` ground velocity, and
-    optionally ``tas_mps (n,)`` the true airspeed (None when the telemetry has no ``tas_mps``).
-    """
-
-    t_s: np.ndarray
-    roll_rad: np.ndarray
-    pitch_rad: np.ndarray
-    heading_rad: np.ndarray
-    omega_body_rps: np.ndarray
-    v_ned_mps: np.ndarray
-    tas_mps: np.ndarray | None = None
-
-    def __post_init__(self):
-        n = len(self.t_s)
-        if self.tas_mps is not None:
-            tas = np.asarray(self.tas_mps, dtype=float)
-            if tas.shape != (n,):
-                raise ValueError(f"InertialSeries.tas_mps must have shape ({n},)")
-            bad = np.nonzero(~(np.isfinite(tas) & (tas > 0)))[0]
-            if bad.size:
-                raise ValueError(f"telemetry: tas_mps at t = {float(self.t_s[bad[0]]):g} s is {tas[bad[0]]!r} "
-                                 "(a positive airspeed in m/s is required)")
-            self.tas_mps = tas
-        for name in ("roll_rad", "pitch_rad", "heading_rad"):
-            if np.shape(getattr(self, name)) != (n,):
-                raise ValueError(f"InertialSeries.{name} must have shape ({n},)")
-        for name in ("omega_body_rps", "v_ned_mps"):
-            if np.shape(getattr(self, name)) != (n, 3):
-                raise ValueError(f"InertialSeries.{name} must have shape ({n}, 3)")
-        for name in ("t_s", "roll_rad", "pitch_rad", "heading_rad", "omega_body_rps", "v_ned_mps"):
-            values = np.asarray(getattr(self, name), dtype=float)
-            if not np.isfinite(values).all():
-                raise ValueError(f"telemetry: {name} holds a NaN or infinite value")
-            setattr(self, name, values)
-        if n < 2 or np.any(np.diff(self.t_s) <= 0):
-            raise ValueError("telemetry: time must increase strictly over at least two samples")
-
-    @classmethod
-    def from_table(cls, table: Table) -> "InertialSeries":
-        """From a ``telemetry.csv`` table (:func:`visland.contracts.read_telemetry`)."""
-        return cls(t_s=table["t_s"], roll_rad=np.unwrap(np.radians(table["roll_deg"])),
-                   pitch_rad=np.radians(table["pitch_deg"]),
-                   heading_rad=np.unwrap(np.radians(table["heading_deg"])),
-                   omega_body_rps=np.radians(np.stack([table["p_dps"], table["q_dps"], table["r_dps"]], axis=1)),
-                   v_ned_mps=np.stack([table["vn_mps"], table["ve_mps"], table["vd_mps"]], axis=1),
-                   tas_mps=table["tas_mps"] if "tas_mps" in table else None)
-
-    @classmethod
-    def from_imu(cls, imu) -> "InertialSeries":
-        """From :class:`visland.sensors.ImuSamples` (a simulation, no files)."""
-        return cls(t_s=imu.t_s, roll_rad=np.unwrap(imu.roll_rad), pitch_rad=imu.pitch_rad,
-                   heading_rad=np.unwrap(imu.heading_rad), omega_body_rps=imu.omega_body_rps,
-                   v_ned_mps=imu.v_ned_mps, tas_mps=getattr(imu, "tas_mps", None))
-
-    def at(self, times_s) -> "InertialSeries":
-        """Linear interpolation at ``times_s`` (inside the covered span)."""
-        times = np.asarray(times_s, dtype=float)
-        if times.size and (times.min() < self.t_s[0] - TIME_MATCH_S or times.max() > self.t_s[-1] + TIME_MATCH_S):
-            raise ValueError(f"telemetry covers {self.t_s[0]:g}..{self.t_s[-1]:g} s but the measurements span "
-                             f"{times.min():g}..{times.max():g} s")
-
-        def interp(series):
-            if series.ndim == 1:
-                return np.interp(times, self.t_s, series)
-            return np.stack([np.interp(times, self.t_s, series[:, k]) for k in range(series.shape[1])], axis=1)
-
-        return InertialSeries(times, interp(self.roll_rad), interp(self.pitch_rad), interp(self.heading_rad),
-                              interp(self.omega_body_rps), interp(self.v_ned_mps),
-                              None if self.tas_mps is None else interp(self.tas_mps))
 
 
 @dataclass

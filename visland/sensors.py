@@ -19,19 +19,25 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from visland.camera import CameraModel
 from visland.flight import Trajectory
 
-__all__ = ["ImuParams", "ImuSamples", "measure_imu", "camera_with_calibration_error", "TELEMETRY_COLUMNS",
-           "TELEMETRY_OPTIONAL_COLUMNS"]
+if TYPE_CHECKING:                       # visland.contracts imports this module's column names
+    from visland.contracts import Table
+
+__all__ = ["ImuParams", "InertialSeries", "measure_imu", "camera_with_calibration_error", "TELEMETRY_COLUMNS",
+           "TELEMETRY_OPTIONAL_COLUMNS", "TIME_MATCH_S"]
 
 TELEMETRY_COLUMNS = ("t_s", "roll_deg", "pitch_deg", "heading_deg", "p_dps", "q_dps", "r_dps",
                      "vn_mps", "ve_mps", "vd_mps")
 #: Columns a telemetry file may add after the SPEC ones: the true airspeed (m/s).
 TELEMETRY_OPTIONAL_COLUMNS = ("tas_mps",)
+#: Two times closer than this (s) are the same instant (inertial samples against frame times).
+TIME_MATCH_S = 1e-6
 
 
 @dataclass(frozen=True)
@@ -60,9 +66,15 @@ class ImuParams:
 
 
 @dataclass
-class ImuSamples:
-    """Inertial data at the simulation rate, SI units (the ``telemetry.csv`` content); ``tas_mps``
-    the true airspeed, None without air data."""
+class InertialSeries:
+    """Inertial data at the unit's rate, SI units (radians, rad/s, m/s): the one record of
+    inertial samples, whether simulated (:func:`measure_imu`), read from ``telemetry.csv``
+    (:meth:`from_table`) or interpolated at frame times (:meth:`at`).
+
+    Attributes: ``t_s (n,)``, ``roll_rad``, ``pitch_rad``, ``heading_rad (n,)`` (unwrapped),
+    ``omega_body_rps (n, 3)`` body rates (p, q, r), ``v_ned_mps (n, 3)`` ground velocity, and
+    optionally ``tas_mps (n,)`` the true airspeed (None when the telemetry has no ``tas_mps``).
+    """
 
     t_s: np.ndarray
     roll_rad: np.ndarray
@@ -72,12 +84,71 @@ class ImuSamples:
     v_ned_mps: np.ndarray
     tas_mps: np.ndarray | None = None
 
+    def __post_init__(self):
+        n = len(self.t_s)
+        if self.tas_mps is not None:
+            tas = np.asarray(self.tas_mps, dtype=float)
+            if tas.shape != (n,):
+                raise ValueError(f"InertialSeries.tas_mps must have shape ({n},)")
+            bad = np.nonzero(~(np.isfinite(tas) & (tas > 0)))[0]
+            if bad.size:
+                raise ValueError(f"telemetry: tas_mps at t = {float(self.t_s[bad[0]]):g} s is {tas[bad[0]]!r} "
+                                 "(a positive airspeed in m/s is required)")
+            self.tas_mps = tas
+        for name in ("roll_rad", "pitch_rad", "heading_rad"):
+            if np.shape(getattr(self, name)) != (n,):
+                raise ValueError(f"InertialSeries.{name} must have shape ({n},)")
+        for name in ("omega_body_rps", "v_ned_mps"):
+            if np.shape(getattr(self, name)) != (n, 3):
+                raise ValueError(f"InertialSeries.{name} must have shape ({n}, 3)")
+        for name in ("t_s", "roll_rad", "pitch_rad", "heading_rad", "omega_body_rps", "v_ned_mps"):
+            values = np.asarray(getattr(self, name), dtype=float)
+            if not np.isfinite(values).all():
+                raise ValueError(f"telemetry: {name} holds a NaN or infinite value")
+            setattr(self, name, values)
+        if n < 2 or np.any(np.diff(self.t_s) <= 0):
+            raise ValueError("telemetry: time must increase strictly over at least two samples")
+
+    @classmethod
+    def from_table(cls, table: "Table") -> "InertialSeries":
+        """From a ``telemetry.csv`` table (:func:`visland.contracts.read_telemetry`)."""
+        return cls(t_s=table["t_s"], roll_rad=np.unwrap(np.radians(table["roll_deg"])),
+                   pitch_rad=np.radians(table["pitch_deg"]),
+                   heading_rad=np.unwrap(np.radians(table["heading_deg"])),
+                   omega_body_rps=np.radians(np.stack([table["p_dps"], table["q_dps"], table["r_dps"]], axis=1)),
+                   v_ned_mps=np.stack([table["vn_mps"], table["ve_mps"], table["vd_mps"]], axis=1),
+                   tas_mps=table["tas_mps"] if "tas_mps" in table else None)
+
+    @classmethod
+    def from_imu(cls, imu: "InertialSeries") -> "InertialSeries":
+        """The simulated samples of :func:`measure_imu` with roll and heading unwrapped."""
+        return cls(t_s=imu.t_s, roll_rad=np.unwrap(imu.roll_rad), pitch_rad=imu.pitch_rad,
+                   heading_rad=np.unwrap(imu.heading_rad), omega_body_rps=imu.omega_body_rps,
+                   v_ned_mps=imu.v_ned_mps, tas_mps=imu.tas_mps)
+
+    def at(self, times_s) -> "InertialSeries":
+        """Linear interpolation at ``times_s`` (inside the covered span)."""
+        times = np.asarray(times_s, dtype=float)
+        if times.size and (times.min() < self.t_s[0] - TIME_MATCH_S or times.max() > self.t_s[-1] + TIME_MATCH_S):
+            raise ValueError(f"telemetry covers {self.t_s[0]:g}..{self.t_s[-1]:g} s but the measurements span "
+                             f"{times.min():g}..{times.max():g} s")
+
+        def interp(series):
+            if series.ndim == 1:
+                return np.interp(times, self.t_s, series)
+            return np.stack([np.interp(times, self.t_s, series[:, k]) for k in range(series.shape[1])], axis=1)
+
+        return InertialSeries(times, interp(self.roll_rad), interp(self.pitch_rad), interp(self.heading_rad),
+                              interp(self.omega_body_rps), interp(self.v_ned_mps),
+                              None if self.tas_mps is None else interp(self.tas_mps))
+
     @property
     def columns_written(self) -> tuple:
         """The telemetry columns these samples fill, in file order."""
         return TELEMETRY_COLUMNS + (TELEMETRY_OPTIONAL_COLUMNS if self.tas_mps is not None else ())
 
     def as_columns(self) -> dict:
+        """The ``telemetry.csv`` columns in SPEC units (degrees, deg/s, m/s; heading in [0, 360))."""
         columns = {
             "t_s": self.t_s,
             "roll_deg": np.degrees(self.roll_rad),
@@ -95,7 +166,7 @@ class ImuSamples:
         return columns
 
 
-def measure_imu(trajectory: Trajectory, params: ImuParams | None = None) -> ImuSamples:
+def measure_imu(trajectory: Trajectory, params: ImuParams | None = None) -> InertialSeries:
     """What the inertial unit reports along ``trajectory`` (see module docstring)."""
     params = params or ImuParams()
     rng = np.random.default_rng(params.seed)
@@ -111,7 +182,7 @@ def measure_imu(trajectory: Trajectory, params: ImuParams | None = None) -> ImuS
     tas = None
     if params.airspeed:
         tas = np.linalg.norm(trajectory.v_ned_mps - trajectory.wind_ned_mps, axis=1) + tas_noise
-    return ImuSamples(
+    return InertialSeries(
         t_s=trajectory.t_s.copy(),
         roll_rad=trajectory.roll_rad + att_noise[:, 0],
         pitch_rad=trajectory.pitch_rad + att_noise[:, 1],

@@ -20,7 +20,7 @@ from visland.contracts import (LABEL_COLUMNS, LABEL_EXTRA_COLUMNS, TRUTH_COLUMNS
 from visland.features import IdealFeatures, ideal_features
 from visland.flight import FT_TO_M, FrameStates, Trajectory, simulate_flight
 from visland.scenarios import Scenario
-from visland.sensors import ImuParams, ImuSamples, camera_with_calibration_error, measure_imu
+from visland.sensors import ImuParams, InertialSeries, camera_with_calibration_error, measure_imu
 
 __all__ = ["SimulationOptions", "SimulationResult", "run_simulation", "write_simulation", "summary_lines",
            "frame_times", "FORMAT_VERSION", "METRIC_HEIGHTS_FT"]
@@ -70,7 +70,7 @@ class SimulationResult:
     scenario: Scenario
     options: SimulationOptions
     trajectory: Trajectory
-    imu: ImuSamples
+    imu: InertialSeries
     frames: FrameStates
     features: IdealFeatures
     camera_true: CameraModel
