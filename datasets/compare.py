@@ -70,8 +70,13 @@ def load_run(path) -> RunResult:
             raise ValueError(f"{path / 'estimates.csv'}: observer {observer} has {len(data['t_s'])} rows whose times "
                              f"do not match the {truth.n_rows} frames of truth.csv")
         series[observer] = data
-    return RunResult(path, str(info.get("source", "?")), str(info.get("scenario") or path.name), dict(truth), series,
-                     _observer_starts(path / "metrics.json"))
+    source, scenario = info.get("source"), info.get("scenario")
+    if not isinstance(source, str) or not source:
+        raise ValueError(f"{info_path}: field 'source' is {json.dumps(source)} (the measurement source that made the "
+                         "run, e.g. \"detection\", is required)")
+    if scenario is not None and not isinstance(scenario, str):
+        raise ValueError(f"{info_path}: field 'scenario' is {json.dumps(scenario)} (a name or null is required)")
+    return RunResult(path, source, scenario or path.name, dict(truth), series, _observer_starts(path / "metrics.json"))
 
 
 def _observer_starts(metrics_path: Path) -> dict:
@@ -129,11 +134,12 @@ def _fmt(value, digits=3):
 
 def compare_runs(run_paths, out_dir, echo=print) -> dict:
     """Build the comparison of ``run_paths`` into ``out_dir``; return its figures."""
-    from visland.estimation.metrics import METRIC_DEFINITIONS, METRIC_HEIGHTS_FT, aggregate_at_100ft
+    from visland.estimation.metrics import FT_TO_M, METRIC_DEFINITIONS, METRIC_HEIGHTS_FT, aggregate_at_100ft
+    from visland.userfiles import check_output_folder
+    out_dir = check_output_folder(out_dir, force=True)         # compare adds its files to a folder
     runs = [load_run(p) for p in run_paths]
     if not runs:
         raise ValueError("give at least one run folder")
-    out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     per_run = [(run, run_figures(run)) for run in runs]
     sources = list(dict.fromkeys(run.source for run in runs))
@@ -187,12 +193,30 @@ def compare_runs(run_paths, out_dir, echo=print) -> dict:
         md.append(f"- {label}: {METRIC_DEFINITIONS[key]}.")
     md.append("- error at h ft: " + METRIC_DEFINITIONS["err_<h>ft_m"].replace("dH - dH_hat", "truth - estimate")
               + "; mean and standard deviation (population) of the 100 ft errors over the runs that have one.")
+    notes = _never_low_enough(runs, METRIC_HEIGHTS_FT)
+    if notes:
+        md[3:3] = notes + [""]
     text = "\n".join(md) + "\n"
     atomic_write_text(out_dir / "compare.md", text)
     atomic_write_text(out_dir / "compare.json", json.dumps(json_ready(summary), indent=2) + "\n")
     _plot(per_run, sources, out_dir)
     echo(text)
     return summary
+
+
+def _never_low_enough(runs, heights_ft) -> list:
+    """One line per run whose truth never descends to a height of the tables (issue 20 item 8):
+    its errors there are "-" and this says why."""
+    from visland.estimation.metrics import FT_TO_M
+    notes = []
+    for run in runs:
+        lowest = float(np.min(run.truth["dh_m"]))
+        missing = [h for h in heights_ft if lowest > h * FT_TO_M]
+        if missing:
+            notes.append(f"Note: run {run.path} ({run.scenario}) never descends below {lowest / FT_TO_M:.0f} ft "
+                         f"({lowest:.1f} m), so it has no errors at {', '.join(f'{h:.0f}' for h in missing)} ft "
+                         "(shown as -).")
+    return notes
 
 
 def _plot(per_run, sources, out_dir: Path) -> None:

@@ -59,6 +59,12 @@ class ProcessOptions:
             raise ValueError("--observer: give at least one observer name")
         if self.fps is not None and not (math.isfinite(self.fps) and self.fps > 0):
             raise ValueError(f"--fps must be a positive number, got {self.fps!r}")
+        if self.initial_height_m is not None and not (math.isfinite(self.initial_height_m)
+                                                      and 0 < self.initial_height_m <= 30000):
+            raise ValueError(f"--initial-height must be a positive number of metres up to 30000 (the plausible "
+                             f"dh_m), got {self.initial_height_m!r}")
+        if not (math.isfinite(self.initial_error) and -0.9 < self.initial_error < 10):
+            raise ValueError(f"--initial-error must lie in (-0.9, 10), got {self.initial_error!r}")
 
 
 def _scenario_of(source) -> str | None:
@@ -114,13 +120,12 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
     started = time.perf_counter()
     for source_kind in out_dirs:
         replace(options, source=source_kind)               # validates the kind
-    for out_dir in out_dirs.values():
-        if Path(out_dir).exists() and not force:
-            raise ValueError(f"{out_dir}: output folder exists; choose another --out or pass --force to replace it")
+    _check_paths(input_path, out_dirs, options, force)
     source = open_source(input_path, camera=options.camera, telemetry=options.telemetry,
                          frames_csv=options.frames_csv, fps=options.fps)
     if source.truth is None and options.initial_height_m is None:
         raise ValueError(f"{input_path}: no truth.csv, so give the initial height guess with --initial-height M")
+    _check_agreement(source, options)
     estimate_options = EstimateOptions(observers=tuple(options.observers), measurements="(set below)",
                                        initial_height_m=options.initial_height_m,
                                        initial_error=options.initial_error, params_file=options.params_file)
@@ -132,6 +137,52 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
         runs[kind] = _write_run(source, measured[kind], replace(options, source=kind), estimate_options,
                                 input_path, out_dir, force, started, echo)
     return runs
+
+
+def _check_paths(input_path, out_dirs: dict, options: ProcessOptions, force: bool) -> None:
+    """Every path the user gave, checked before any work (issue 19): what it must be, and that
+    each output folder can be made."""
+    from visland.userfiles import check_input_file, check_output_folder
+    path = Path(input_path)
+    if not path.exists():
+        raise ValueError(f"{path}: input not found (give a frame folder or a video file)")
+    for value, option, what in ((options.camera, "--camera", "camera file"),
+                                (options.telemetry, "--telemetry", "telemetry file"),
+                                (options.frames_csv, "--frames-csv", "frame times file"),
+                                (options.params_file, "--params", "observer parameter file")):
+        if value is not None:
+            check_input_file(value, what, option)
+    folder = path if path.is_dir() else path.parent
+    if options.camera is None and (folder / "camera.json").exists():
+        check_input_file(folder / "camera.json", "camera file")        # a folder named camera.json, say
+    for out_dir in out_dirs.values():
+        check_output_folder(out_dir, force=force)
+
+
+def _check_agreement(source, options: ProcessOptions) -> None:
+    """What only the inputs together can tell, checked before the first frame is measured
+    (issue 20 item 2): the camera's plausibility, frame times against the telemetry rate, truth
+    and labels (one row per frame, at the frame times), the labels' pixels in the image."""
+    from visland.limits import check_camera, check_frame_times, check_pixels, check_telemetry_rate
+    times = np.asarray(source.times_s, dtype=float)
+    how = ("frame times (--fps)" if options.fps is not None and options.frames_csv is None else
+           f"frame times of {source.name}")
+    check_camera(source.camera, options.camera or "camera.json")
+    check_frame_times(times, how)
+    if source.telemetry is not None:
+        check_telemetry_rate(source.telemetry["t_s"], times, str(source.telemetry.path))
+    for table, what in ((source.truth, "truth"), (source.labels, "labels")):
+        if table is None:
+            continue
+        if table.n_rows != len(times):
+            raise ValueError(f"{table.path}: {table.n_rows} rows but there are {len(times)} frames (one row per frame)")
+        off = np.nonzero(np.abs(table["t_s"] - times) > 1e-6)[0]
+        if off.size:
+            i = int(off[0])
+            raise ValueError(f"{table.path} line {i + 2}: t_s is {table['t_s'][i]:g} s but frame {i} is at "
+                             f"{times[i]:g} s ({how}); the {what} must have one row per frame at the frame times")
+    if source.labels is not None:
+        check_pixels(source.labels, source.camera.width, source.camera.height)
 
 
 def _write_run(source, measurements, options, estimate_options, input_path, out_dir, force, started, echo) -> dict:

@@ -51,8 +51,9 @@ class EstimateOptions:
         for name in self.observers:
             observer_class(name)          # raises with the list of known names
         if self.initial_height_m is not None and not (math.isfinite(self.initial_height_m)
-                                                      and self.initial_height_m > 0):
-            raise ValueError(f"--initial-height must be a positive number of metres, got {self.initial_height_m!r}")
+                                                      and 0 < self.initial_height_m <= 30000):
+            raise ValueError(f"--initial-height must be a positive number of metres up to 30000 (the plausible "
+                             f"dh_m), got {self.initial_height_m!r}")
         if not (math.isfinite(self.initial_error) and -0.9 < self.initial_error < 10):
             raise ValueError(f"--initial-error must lie in (-0.9, 10), got {self.initial_error!r}")
         if not (math.isfinite(self.aim_distance_m) and 0 <= self.aim_distance_m <= 2000):
@@ -82,9 +83,11 @@ def _read_inputs(folder: Path, measurements: str):
     from visland.camera import CameraModel
     from visland.contracts import read_labels, read_measurements, read_telemetry, read_truth
     from visland.estimation.inputs import FeatureSeries, InertialSeries
-    if not folder.is_dir():
-        raise ValueError(f"{folder}: input folder not found")
-    camera = CameraModel.load(folder / "camera.json")
+    from visland.limits import check_camera, check_pixels, check_telemetry_rate
+    from visland.userfiles import check_input_file, check_input_folder
+    check_input_folder(folder)
+    camera = CameraModel.load(check_input_file(folder / "camera.json", "camera file"))
+    check_camera(camera, str(folder / "camera.json"))
     telemetry = read_telemetry(folder / "telemetry.csv")
     if measurements == "ideal":
         path = folder / "labels.csv"
@@ -94,6 +97,8 @@ def _read_inputs(folder: Path, measurements: str):
     else:
         path = Path(measurements)
         table = read_measurements(path)
+    check_pixels(table, camera.width, camera.height, rows=(table["found"] > 0.5) if "found" in table else None)
+    check_telemetry_rate(telemetry["t_s"], table["t_s"], str(folder / "telemetry.csv"))
     features = FeatureSeries.from_table(table)
     truth = None
     truth_path = folder / "truth.csv"

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from visland.limits import check_columns, check_frame_times
 from visland.runway import CORNER_NAMES
 from visland.sensors import TELEMETRY_COLUMNS, TELEMETRY_OPTIONAL_COLUMNS
 
@@ -177,6 +178,10 @@ def staged_output_dir(out_dir, force: bool = False):
     os.chmod(staging, 0o777 & ~_UMASK)
     try:
         yield staging
+    except ValueError as error:
+        shutil.rmtree(staging, ignore_errors=True)
+        # the staging folder is gone and means nothing to the user: name the output instead
+        raise ValueError(str(error).replace(str(staging), str(out_dir))) from None
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
@@ -216,8 +221,11 @@ def read_csv(path, required, text_columns=(), optional_empty=(), name=None) -> T
             header = next(reader)
         except StopIteration:
             raise ValueError(f"{label}: file is empty (expected a header row)") from None
-        except (csv.Error, UnicodeDecodeError) as error:
+        except csv.Error as error:
             raise ValueError(f"{label}: not a readable CSV file ({error})") from None
+        except UnicodeDecodeError as error:
+            raise ValueError(f"{label}: not UTF-8 text (byte {error.start} is 0x{error.object[error.start]:02x}), "
+                             "not a CSV file") from None
         header = [h.strip() for h in header]
         duplicates = {h for h in header if header.count(h) > 1}
         if duplicates:
@@ -253,8 +261,10 @@ def read_csv(path, required, text_columns=(), optional_empty=(), name=None) -> T
                         raise ValueError(f"{label} line {line_number}: column '{column}' is {cell} "
                                          "(a finite number is required)")
                     raw[column].append(value)
-        except (csv.Error, UnicodeDecodeError) as error:
+        except csv.Error as error:
             raise ValueError(f"{label}: not a readable CSV file ({error})") from None
+        except UnicodeDecodeError:
+            raise ValueError(f"{label}: not UTF-8 text, not a CSV file") from None
     columns = {h: (np.array(v, dtype=object).astype(str) if h in text else np.array(v, dtype=float))
                for h, v in raw.items()}
     if not columns[header[0]].size:
@@ -277,6 +287,7 @@ def read_telemetry(path) -> Table:
     ``tas_mps`` (true airspeed), when present, positive and finite on every line."""
     table = read_csv(path, TELEMETRY_COLUMNS)
     check_time_column(table)
+    check_columns(table)
     for column in TELEMETRY_OPTIONAL_COLUMNS:
         if column in table:
             bad = np.nonzero(~(np.isfinite(table[column]) & (table[column] > 0)))[0]
@@ -291,6 +302,8 @@ def read_truth(path) -> Table:
     """``truth.csv``: the SPEC columns (extras optional), strictly increasing time."""
     table = read_csv(path, TRUTH_COLUMNS)
     check_time_column(table)
+    check_columns(table)
+    check_frame_times(table["t_s"], str(table.path))
     return table
 
 
@@ -298,6 +311,9 @@ def read_labels(path) -> Table:
     """``labels.csv``: the SPEC labels schema; feature cells may be empty (not visible)."""
     table = read_csv(path, LABEL_COLUMNS, optional_empty=_FEATURE_COLUMNS)
     check_time_column(table)
+    _check_frames_and_flags(table)
+    check_columns(table)
+    check_frame_times(table["t_s"], str(table.path))
     return table
 
 
@@ -309,13 +325,43 @@ def read_measurements(path) -> Table:
     bad = np.nonzero(~np.isin(table["found"], (0.0, 1.0)))[0]
     if bad.size:
         raise ValueError(f"{table.path} line {int(bad[0]) + 2}: column 'found' must be 0 or 1")
+    _check_frames_and_flags(table)
+    check_columns(table, rows=table["found"] > 0.5)
+    check_frame_times(table["t_s"], str(table.path))
     return table
+
+
+def _check_frames_and_flags(table: Table) -> None:
+    """``frame`` holds the integers 0, 1, 2... in order (when the column is there, it may be
+    missing from a measurement file from elsewhere) and each ``*_visible`` flag is 0 or 1."""
+    if "frame" in table and table["frame"].dtype.kind == "f":
+        frames = table["frame"]
+        bad = np.nonzero((frames != np.round(frames)) | (frames < 0))[0]
+        if bad.size:
+            i = int(bad[0])
+            raise ValueError(f"{table.path} line {i + 2}: column 'frame' is {frames[i]:g} (a frame index 0, 1, 2... "
+                             "is required)")
+        bad = np.nonzero(np.diff(frames) <= 0)[0]
+        if bad.size:
+            i = int(bad[0]) + 1
+            raise ValueError(f"{table.path} line {i + 2}: frame {frames[i]:g} after frame {frames[i - 1]:g} (one row "
+                             "per frame, in order)")
+    for corner in CORNER_NAMES:
+        column = f"{corner}_visible"
+        if column in table:
+            values = table[column]
+            bad = np.nonzero(np.isfinite(values) & ~np.isin(values, (0.0, 1.0)))[0]
+            if bad.size:
+                i = int(bad[0])
+                raise ValueError(f"{table.path} line {i + 2}: column '{column}' is {values[i]:g} (0 or 1 is required)")
 
 
 def read_frames_csv(path) -> Table:
     """``frames.csv``: ``frame,t_s`` with increasing time."""
     table = read_csv(path, FRAMES_COLUMNS, text_columns=("frame",))
     check_time_column(table)
+    check_columns(table, columns=("t_s",))
+    check_frame_times(table["t_s"], str(table.path))
     return table
 
 
