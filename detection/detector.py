@@ -510,6 +510,11 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     dF = float(dF_from_vanishing_point(vp_xy[None, :], np.array([horizon.rho]), np.array([horizon.theta]),
                                        camera)[0])
     dpsi = float(dpsi_from_dF(np.array([dF]), np.array([ctx.roll]), np.array([ctx.pitch]), camera)[0])
+    if not abs(dpsi) <= math.radians(params.max_heading_deviation_deg):
+        # a runway being approached lies ahead: its direction within tens of degrees of the
+        # aircraft's heading (a crossing taxiway or road meets the horizon far to the side)
+        return None, (f"the edges meet the horizon {math.degrees(dpsi):+.0f} deg off the aircraft's heading "
+                      f"(> {params.max_heading_deviation_deg:g}): not a runway being approached")
     s0_vp = float(horizon.to_sd(vp_uv)[0])
 
     # threshold and runway end

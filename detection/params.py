@@ -65,6 +65,7 @@ SCALES_WITH_FOCAL = {
     "max_vp_jump_px": 0.0,
     "max_vp_jump_rate_pxps": 0.0,
     "max_threshold_jump_px": 0.0,
+    "static_min_horizon_motion_px": 0.5,
 }
 
 #: Pixel lengths that deliberately do not scale (sub-pixel sampling and noise floors, working-image
@@ -295,6 +296,10 @@ class DetectorParams(ParamsFile):
         Detections below this confidence are reported as not found.
     horizon_margin_px : float
         The horizon from roll and pitch must cross the image enlarged by this margin.
+    max_heading_deviation_deg : float
+        A runway being approached lies ahead: a pair of edges whose vanishing point says the
+        runway's direction is more than this far from the aircraft's heading (a crossing
+        taxiway or road) is not taken (the thesis's approaches start within 15 deg).
     hold_s : float
         Over a sequence (:class:`visland.detection.DetectionSequence`): how long the last good
         detection keeps predicting the runway after frames where it was not found, before the
@@ -307,6 +312,13 @@ class DetectorParams(ParamsFile):
     max_vp_jump_px, max_vp_jump_rate_pxps : float
         Over a sequence: the same for the vanishing point's move along the horizon (d_F), in
         pixels of the reference image side.
+    static_window_s, static_min_horizon_motion_px, static_max_motion_ratio : float
+        Over a sequence: a runway moves in the image with the scene. When, between a detection
+        and one up to ``static_window_s`` earlier, the horizon moved by more than
+        ``static_min_horizon_motion_px`` (the camera turned) while the detected edges' crossing
+        (the vanishing point, which moves with the horizon) moved by less than
+        ``static_max_motion_ratio`` of that, the "runway" is fixed to the camera (the
+        windshield frame, the glareshield): refused.
     identity_memory_s : float
         Over a sequence: how long the runway's place on the ground relative to the camera (its
         centre line's lateral offset over height, its width over height: the pencil slopes
@@ -459,12 +471,16 @@ class DetectorParams(ParamsFile):
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     horizon_margin_px: float = 0.0
+    max_heading_deviation_deg: float = 40.0
     # --- over a sequence (sequence)
     hold_s: float = 1.0
     max_edge_turn_rad: float = 0.05
     max_edge_turn_rate_rps: float = 0.3
     max_vp_jump_px: float = 60.0
     max_vp_jump_rate_pxps: float = 250.0
+    static_window_s: float = 3.0
+    static_min_horizon_motion_px: float = 8.0
+    static_max_motion_ratio: float = 0.2
     identity_memory_s: float = 10.0
     identity_k_tolerance: float = 0.1
     identity_k_rate: float = 0.05
@@ -532,11 +548,12 @@ class DetectorParams(ParamsFile):
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
         "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "min_confidence": (0.0, 1.0),
-        "horizon_margin_px": (0.0, 100000.0), "hold_s": (0.0, 60.0), "max_edge_turn_rad": (0.0, 3.2),
+        "horizon_margin_px": (0.0, 100000.0), "hold_s": (0.0, 60.0), "max_heading_deviation_deg": (1.0, 90.0), "max_edge_turn_rad": (0.0, 3.2),
         "max_edge_turn_rate_rps": (0.0, 100.0), "max_vp_jump_px": (0.0, 100000.0),
         "max_vp_jump_rate_pxps": (0.0, 1e6), "max_threshold_jump_px": (0.0, 100000.0),
         "max_threshold_jump_fraction": (0.0, 100.0), "threshold_track_s": (0.1, 60.0),
-        "identity_memory_s": (0.0, 600.0), "identity_k_tolerance": (0.0, 100.0), "identity_k_rate": (0.0, 100.0),
+        "static_window_s": (0.1, 60.0), "static_min_horizon_motion_px": (0.0, 100000.0),
+        "static_max_motion_ratio": (0.0, 1.0), "identity_memory_s": (0.0, 600.0), "identity_k_tolerance": (0.0, 100.0), "identity_k_rate": (0.0, 100.0),
         "identity_width_tolerance": (0.0, 100.0), "identity_width_rate": (0.0, 100.0),
         "threshold_width_tolerance_px": (0.0, 1000.0), "threshold_width_tolerance_fraction": (0.0, 10.0),
         "reference_rate_hz": (0.1, 10000.0),

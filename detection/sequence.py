@@ -76,6 +76,7 @@ class DetectionSequence:
         self.threshold_rejected: list[tuple[float, float]] = []   # rejected in a row
         self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
         self.identity: tuple | None = None                        # (t_s, k_centre, width_ratio) last accepted
+        self.recent: list[tuple[float, DetectionResult]] = []     # found, within static_window_s
 
     def reset(self) -> None:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
@@ -85,6 +86,7 @@ class DetectionSequence:
         self.threshold_rejected = []
         self.image_attitude = None
         self.identity = None
+        self.recent = []
 
     def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float) -> DetectionResult:
         """Detect the runway in the frame at ``t_s`` (seconds, increasing).
@@ -107,6 +109,8 @@ class DetectionSequence:
                 result = not_found(f"refused: {why} since the detection {dt:.2f} s earlier ({result.mode} "
                                    f"picked another object)", roll_rad=float(roll_rad), pitch_rad=float(pitch_rad),
                                    mode=result.mode, image_size=result.image_size, elapsed_s=result.elapsed_s)
+        if result.found:
+            result = self._check_moves_with_scene(result, float(t_s))
         if result.found and prior is None and self.identity is not None:
             result = self._check_identity(result, image, roll_rad, pitch_rad, float(t_s))
         if result.found and prior is not None:
@@ -119,6 +123,31 @@ class DetectionSequence:
             geometry = _ground_geometry(result, self.camera)
             if geometry is not None:
                 self.identity = (float(t_s),) + geometry
+        return result
+
+    def _check_moves_with_scene(self, result: DetectionResult, t_s: float) -> DetectionResult:
+        """Refuse a "runway" that stays put in the image while the horizon moves (:class:`DetectorParams`
+        ``static_*``): part of the aircraft, not of the scene."""
+        p = self.params
+        self.recent = [(t, r) for t, r in self.recent if 0.0 < t_s - t <= p.static_window_s]
+        if self.recent:
+            _, old = self.recent[0]
+            # a turn of the camera moves the horizon and every world point by about as much; the
+            # edges' crossing (the vanishing point) is the point that moves most plainly (near-
+            # vertical edges slide along themselves under pitch)
+            horizon_motion = _line_motion_px(self.camera, old.horizon, result.horizon)
+            vp_then, vp_now = _edges_crossing(old, self.camera), _edges_crossing(result, self.camera)
+            edge_motion = (float(np.linalg.norm(vp_now - vp_then)) if vp_then is not None and vp_now is not None
+                           else math.inf)
+            if (horizon_motion > p.static_min_horizon_motion_px
+                    and edge_motion < p.static_max_motion_ratio * horizon_motion):
+                self.recent.append((t_s, result))
+                return not_found(f"refused: the edges' crossing stayed within {edge_motion:.1f} px in the image while the "
+                                 f"horizon moved {horizon_motion:.0f} px: fixed to the camera (the aircraft's "
+                                 "structure? mask it in camera.json, see visland mask), not the runway",
+                                 roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
+                                 image_size=result.image_size, elapsed_s=result.elapsed_s)
+        self.recent.append((t_s, result))
         return result
 
     def _check_identity(self, result: DetectionResult, image, roll_rad, pitch_rad, t_s: float) -> DetectionResult:
@@ -252,6 +281,19 @@ class DetectionSequence:
             if jump > jump_limit:
                 return f"the vanishing point moved {jump:.0f} px along the horizon (> {jump_limit:.0f})"
         return ""
+
+
+def _line_motion_px(camera: CameraModel, line_then, line_now) -> float:
+    """Largest distance (px) between two SPEC lines at the image's left edge, centre and right edge."""
+    if not all(math.isfinite(x) for x in (*line_then, *line_now)):
+        return 0.0
+    r_then, t_then = camera.line_to_pixel_hough(*line_then)
+    c, s = math.cos(float(t_then)), math.sin(float(t_then))
+    if abs(s) < 1e-6:
+        return 0.0
+    u = np.array([0.0, (camera.width - 1) / 2.0, camera.width - 1.0])
+    v = (float(r_then) - u * c) / s
+    return float(np.abs(camera.line_distance_px(*line_now, np.stack([u, v], axis=-1))).max())
 
 
 def _ground_geometry(result: DetectionResult, camera: CameraModel):

@@ -175,3 +175,54 @@ def test_the_runway_s_ground_geometry_tells_it_from_a_parallel_strip():
                     heading_deg=runway.heading_deg)
     assert "width / height" in _identity_mismatch(_runway_result(states, j, narrow, camera), camera, k_c, width,
                                                   2.0, params)
+
+
+def _camera_turned_result(camera, states, i, pitch_offset_deg, fixed_to_camera):
+    """A found result at pitch + offset: the runway's exact edges (they move with the camera),
+    or the edges of the unturned view (an object fixed to the camera); the horizon always turns."""
+    import math as _math
+    from dataclasses import replace as _replace
+
+    import numpy as _np
+
+    from visland.camera import line_through_points
+    from visland.detection.horizon import horizon_frame
+    from visland.detection.result import DetectionResult
+    from visland.features import ideal_features
+    from visland.scenarios import get_scenario
+    state = states.at(states.t_s[i:i + 1])
+    turned = _replace(state, pitch_rad=state.pitch_rad + _math.radians(pitch_offset_deg))
+    corners = ideal_features(state if fixed_to_camera else turned, get_scenario("thesis-3").runway,
+                             camera).corners_uv[0]
+    segments = {"left": _np.array([corners[2], corners[0]]), "right": _np.array([corners[3], corners[1]])}
+    lines = {}
+    for name, seg in segments.items():
+        rho, theta = line_through_points(camera.pixels_to_normalized(seg[0]), camera.pixels_to_normalized(seg[1]))
+        lines[name] = (float(rho), float(theta))
+    lines["center"] = (_math.nan, _math.nan)
+    horizon = horizon_frame(camera, float(turned.roll_rad[0]), float(turned.pitch_rad[0]))
+    return DetectionResult(found=True, reason="", confidence=0.9, lines=lines, segments_uv=segments,
+                           horizon=(horizon.rho, horizon.theta), roll_rad=float(turned.roll_rad[0]),
+                           pitch_rad=float(turned.pitch_rad[0]), mode="tracking")
+
+
+@pytest.mark.parametrize("fixed_to_camera", [False, True])
+def test_a_runway_that_does_not_move_with_the_scene_is_refused(monkeypatch, fixed_to_camera):
+    """The camera pitches up 0.5 deg per frame: the runway's edges move with the horizon, the
+    windshield frame's do not (issue 18: plausibility before confidence)."""
+    from visland.camera import CameraModel
+    from visland.detection import sequence as sequence_module
+    from visland.flight import simulate_flight
+    from visland.scenarios import get_scenario
+    camera = CameraModel.from_fov(640, 360, 60.0, (0.0, -4.0, 0.0))
+    states = simulate_flight(get_scenario("thesis-3"))
+    i = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 2000.0)))
+    results = iter([_camera_turned_result(camera, states, i, 0.5 * k, fixed_to_camera) for k in range(4)])
+    monkeypatch.setattr(sequence_module, "detect_runway", lambda *args, **kwargs: next(results))
+    sequence = sequence_module.DetectionSequence(camera)
+    outcomes = [sequence(None, 0.0, 0.0, 0.5 * k) for k in range(4)]
+    if fixed_to_camera:
+        assert outcomes[0].found and not any(r.found for r in outcomes[1:])
+        assert "fixed to the camera" in outcomes[1].reason
+    else:
+        assert all(r.found for r in outcomes), [r.reason for r in outcomes]
