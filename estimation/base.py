@@ -104,6 +104,11 @@ class ObserverInput:
     tas_mps : float
         True airspeed (telemetry column ``tas_mps``), NaN when the telemetry has none; used by
         observers that estimate the wind (``dickmanns-4d``).
+    slope : float
+        The runway's longitudinal slope (``slope_pct / 100``, uphill positive) that ``n_camera``
+        carries: 0 unless the mounting's self-calibration estimated it
+        (:mod:`visland.estimation.calibration`). ``n_camera`` is then the sloped plane's normal
+        and a line observer's ``1/eta`` the distance to that plane.
     """
 
     t_s: float
@@ -119,6 +124,7 @@ class ObserverInput:
     roll_rad: float = 0.0
     pitch_rad: float = 0.0
     tas_mps: float = math.nan
+    slope: float = 0.0
 
 
 @dataclass

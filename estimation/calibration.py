@@ -190,6 +190,33 @@ def _bearings(uv, R_NC, camera):
     return _unit(np.einsum("nij,nkj->nki", R_NC, _homog(camera.pixels_to_normalized(uv))))
 
 
+#: A pass re-linearises a frame's measurements at the previous pass's estimate once its standard
+#: deviations (roll, pitch, yaw) are under this (degrees); before, at the nominal mounting.
+LINEARISE_SIGMA_DEG = 0.1
+
+#: Frames whose bearings are averaged into the epipolar constraint's H (see _measurements).
+H_WINDOW = 8
+
+
+def _causal_mean_bearings(near, R_NC, camera, window: int = H_WINDOW):
+    """Unit mean NED bearing (m, 2, 3) of each threshold corner over the ``window`` frames before each
+    frame (the frame itself excluded), NaN where none of them measured the corners."""
+    m = len(near)
+    ok = np.isfinite(near).all(axis=(1, 2))
+    r = np.zeros((m, 2, 3))
+    if ok.any():
+        r[ok] = _bearings(near[ok], R_NC[ok], camera)
+    c = np.concatenate([np.zeros((1, 2, 3)), np.cumsum(r, axis=0)])
+    n = np.concatenate([[0], np.cumsum(ok)])
+    idx = np.arange(m)
+    lo = np.maximum(idx - window, 0)
+    total = c[idx] - c[lo]
+    count = (n[idx] - n[lo])[:, None, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+        return mean / np.linalg.norm(mean, axis=-1, keepdims=True)
+
+
 def _epipolar(r_k, r_j, T_unit):
     """``r_k . (T x r_j)`` for bearings (n, 2, 3) and unit translations (n, 3)."""
     return np.einsum("nki,nki->nk", r_k, np.cross(T_unit[:, None, :], r_j))
@@ -254,18 +281,14 @@ def _measurements(near, far, R_NB, R_BC, J, k_idx, j_idx, T_unit, camera, sigma_
             # a frame takes part in two pairs (as k and as j): the pairs' errors are correlated, so
             # each counts as half an independent measurement
             var[k_idx, 2:] = 2.0 * v
-        # H from the bearings of the frames just before (k-1, j-1): the same geometry to 1/fps, but
-        # noise independent of y's (an instrumental variable: H from the frame's own noisy
-        # bearings correlates with y and biases the estimate by noise^2 / parallax, 0.05 deg at
-        # 1 px with a 3 s baseline)
-        prev_ok = (k_idx >= 1) & (j_idx >= 1)
-        prev_ok[prev_ok] &= np.isfinite(near[k_idx[prev_ok] - 1]).all(axis=(1, 2)) & \
-            np.isfinite(near[j_idx[prev_ok] - 1]).all(axis=(1, 2))
-        ri_k, ri_j = r_k.copy(), r_j.copy()
-        if prev_ok.any():
-            kp, jp = k_idx[prev_ok] - 1, j_idx[prev_ok] - 1
-            ri_k[prev_ok] = _bearings(near[kp], R_NB[kp] @ R_BC[k_idx[prev_ok]], camera)
-            ri_j[prev_ok] = _bearings(near[jp], R_NB[jp] @ R_BC[k_idx[prev_ok]], camera)
+        # H from the mean bearings of the H_WINDOW frames before k and before j: the same geometry
+        # to a fraction of a second, but noise independent of y's (an instrumental variable: H
+        # from the frame's own noisy bearings correlates with y and biases the estimate by
+        # noise^2 / parallax, 0.05 deg at 1 px with a 3 s baseline) and averaged (far away the
+        # parallax is small, and one frame's bearings make a weak, heavy-tailed instrument)
+        smooth = _causal_mean_bearings(near, R_NB @ R_BC, camera)
+        ri_k = np.where(np.isfinite(smooth[k_idx]), smooth[k_idx], r_k)
+        ri_j = np.where(np.isfinite(smooth[j_idx]), smooth[j_idx], r_j)
         a_k = np.cross(ri_k, np.cross(T_unit[:, None, :], ri_j))          # r_k x (T x r_j)
         a_j = np.cross(ri_j, np.cross(ri_k, T_unit[:, None, :]))          # r_j x (r_k x T)
         H[k_idx, 2:, :3] = np.einsum("nqi,nik->nqk", a_k, RJ[k_idx]) + np.einsum("nqi,nik->nqk", a_j, RJ_j)
@@ -328,7 +351,8 @@ def estimate_mount_error(t_s, near_uv_px, far_uv_px, roll_rad, pitch_rad, headin
     passes : the epipolar constraint's second-order terms are not negligible against its
         first-order ones (the two bearings nearly coincide), so the measurements are
         re-linearised at the previous pass's causal estimate (the one of the frame before:
-        still causal); 3 passes bring the bias far under the noise.
+        still causal) once it is known to LINEARISE_SIGMA_DEG; 3 passes bring the bias far
+        under the noise.
     """
     params = params or CalibrationParams()
     t_s = np.asarray(t_s, dtype=float)
@@ -362,7 +386,15 @@ def estimate_mount_error(t_s, near_uv_px, far_uv_px, roll_rad, pitch_rad, headin
         var = v if var is None else var
         y = y + np.einsum("nqk,nk->nq", H[:, :, :3], lin)
         theta, sigma, used, rejected = _filter(y, H, var, prior, params.gate_sigma)
-        lin = np.concatenate([np.zeros((1, 3)), theta[:-1, :3]])
+        # re-linearise only where the estimate is already good: far away it swings by a degree,
+        # and a row linearised a degree off carries second-order errors larger than its noise
+        # (the frames before the first good estimate at that estimate: their outputs, from before
+        # it, are never applied to the observers, which wait for CALIBRATION_SETTLED_RAD)
+        good = sigma[:-1, :3].max(axis=1) <= math.radians(LINEARISE_SIGMA_DEG)
+        first = int(np.argmax(good)) if good.any() else len(good)
+        lin = np.concatenate([np.zeros((1, 3)), np.where(good[:, None], theta[:-1, :3], 0.0)])
+        if first < len(good):
+            lin[:first + 1] = theta[first, :3]
     sigma[:, 3] *= 100.0
     calibration = MountCalibration(t_s=t_s, mount_error_rad=theta[:, :3], slope_pct=100.0 * theta[:, 3],
                                    sigma=sigma, n_used=used, n_rejected=rejected)

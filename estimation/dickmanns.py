@@ -672,7 +672,7 @@ class Dickmanns4D(Observer):
                 (theta, rho), _ = line_from_normal((a1 - b1, b0 - a0, a0 * b1 - a1 * b0))
                 z[4], z[5] = _aligned(theta, rho, h[4])
                 k = 3
-            (theta, rho), _ = line_from_normal(inp.n_camera)          # horizon of the inertial attitude
+            (theta, rho), _ = line_from_normal(R_rc[2])               # horizon of the inertial attitude (level down axis)
             z[2 * k], z[2 * k + 1] = _aligned(theta, rho, h[2 * k])
             R_vision = self._vision_covariance(x, R_rc, M_C, with_threshold)
             z_parts.append(np.array(z))

@@ -340,6 +340,7 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     calibration = None
     mount_error_frame = np.zeros((len(frame_t), 3))
     calibration_wait = np.zeros(len(frame_t), dtype=bool)
+    slope_frame = np.zeros(len(frame_t))
     if self_calibration not in ("off", "check", "apply"):
         raise ValueError(f"self_calibration must be 'off', 'check' or 'apply', got {self_calibration!r}")
     if self_calibration != "off":
@@ -360,6 +361,7 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
             first_t = frame_t[measured[0]] if measured.size else frame_t[0]
             if settled.any() and frame_t[np.argmax(settled)] <= first_t + CALIBRATION_MAX_WAIT_S:
                 mount_error_frame = np.where(settled[:, None], calibration.mount_error_rad, 0.0)
+                slope_frame = np.where(settled, calibration.slope_pct / 100.0, 0.0)
                 calibration_wait = ~settled
             else:
                 calibration.applied = False
@@ -409,6 +411,14 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
     v_runway = np.stack([c * vn + s * ve, -s * vn + c * ve, ins.v_ned_mps[:, 2]], axis=1)
     v_camera = np.einsum("nij,nj->ni", R_cr, v_runway)
     n_camera = R_cr[:, :, 2]
+    if corrected and calibration is not None:
+        # the runway plane's normal (thesis 3.33's n; Runway.normal_runway) with the estimated
+        # slope: the line observers then measure the distance to the sloped plane (runner converts)
+        slope = np.where(last_frame >= 0, slope_frame[np.clip(last_frame, 0, None)], 0.0)
+        n_runway = np.stack([slope, np.zeros_like(slope), np.ones_like(slope)], axis=1) / np.sqrt(1.0 + slope ** 2)[:, None]
+        n_camera = np.einsum("nij,nj->ni", R_cr, n_runway)
+    else:
+        slope = np.zeros(len(times))
 
     # ---- measurements at their steps
     frame_steps = step_of_frame
@@ -449,7 +459,8 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
             points_yv=points_j, lines=lines_j, center_line=center_j,
             dpsi_rad=float(dpsi[j]) if usable[j] else math.nan,
             roll_rad=float(ins.roll_rad[j]), pitch_rad=float(ins.pitch_rad[j]),
-            tas_mps=math.nan if ins.tas_mps is None else float(ins.tas_mps[j])))
+            tas_mps=math.nan if ins.tas_mps is None else float(ins.tas_mps[j]),
+            slope=float(slope[j])))
     return PreparedInputs(steps=steps, t_s=times, frame_of_step=frame_of_step, step_of_frame=step_of_frame,
                           frame_t_s=frame_t, psi_runway_rad=psi_rwy, dpsi_rad=dpsi, dpsi_frame_rad=dpsi_frame,
                           frame_reason=reason, points_ok=pts, lines_ok=lines_ok, calibration=calibration)

@@ -72,12 +72,17 @@ def inputs_of(inp) -> tuple:
     """``(v0, v1, v2, w0, w1, w2, n0, n1, n2, v3)`` as floats from an ObserverInput.
 
     ``v`` camera velocity in C, ``w`` camera angular velocity in C, ``n`` runway down axis in C
-    (thesis 3.33), ``v3`` the vertical (runway z, down) velocity that drives ``eta' = v3 eta^2``.
+    (thesis 3.33), ``v3`` the velocity along ``n`` that drives ``eta' = v3 eta^2`` (``n . v``: the
+    runway-axes z velocity on a level runway, the rate of the distance to a sloped runway's plane).
     """
     v = inp.v_camera_mps.tolist()
     w = inp.omega_camera_rps.tolist()
     n = inp.n_camera.tolist()
-    return (v[0], v[1], v[2], w[0], w[1], w[2], n[0], n[1], n[2], float(inp.v_runway_mps[2]))
+    if inp.slope == 0.0:
+        v3 = float(inp.v_runway_mps[2])
+    else:
+        v3 = n[0] * v[0] + n[1] * v[1] + n[2] * v[2]
+    return (v[0], v[1], v[2], w[0], w[1], w[2], n[0], n[1], n[2], v3)
 
 
 def edge_terms(theta: float, rho: float, u: tuple) -> tuple:

@@ -89,6 +89,7 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     extras = {}
 
     last_correction = [float(steps[start].t_s)]
+    last_y1 = [math.nan]
 
     def record(j, estimate):
         f = frame_of_step[j]
@@ -102,7 +103,10 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
             reason[f] = (f"no measurement for {inp.t_s - last_correction[0]:.1f} s (> {max_coast_s:g} s): "
                          f"estimate withheld ({estimate.reason})")
             return
-        out["dh_m"][f] = estimate.dh_m
+        dh = estimate.dh_m
+        if observer.features == "lines" and inp.slope != 0.0:
+            dh = _level_height(dh, inp, last_y1)
+        out["dh_m"][f] = dh
         out["observability"][f] = estimate.observability
         coasting[f] = estimate.coasting
         reason[f] = estimate.reason if estimate.coasting else ""
@@ -122,7 +126,7 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
                 dev = deviations_from_points(yv, estimate.dh_m, aim_distance_m)
                 out["dx_m"][f], out["dy_m"][f], out["width_m"][f] = dev.dx_m, dev.dy_m, dev.width_m
         elif inp.lines is not None:
-            dev = deviations_from_lines(inp.lines, inp.R_runway_from_camera, estimate.dh_m)
+            dev = deviations_from_lines(inp.lines, inp.R_runway_from_camera, dh)
             out["dy_m"][f], out["width_m"][f] = dev.dy_m, dev.width_m
 
     observer.reset(steps[start], dh0_m)
@@ -145,6 +149,24 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
                        start_t_s=float(steps[start].t_s), dh0_m=float(dh0_m), step_time_s=elapsed,
                        n_steps=len(steps) - start - 1, params=params, extras=extras,
                        notes=list(getattr(observer, "notes", ())), **out)
+
+
+def _level_height(distance_m: float, inp, last_y1: list) -> float:
+    """Height above the threshold's level from a line observer's distance to a sloped runway plane.
+
+    The plane ``s x + z = 0`` (R, z down; ``s = inp.slope``) through the threshold is at the
+    distance ``d = (h - s x) / sqrt(1 + s^2)`` from the camera at ``(x, ., -h)``; the threshold
+    corners' virtual coordinate ``y_v1 = -x / h`` (thesis 3.23) gives ``x``, so
+    ``h = d sqrt(1 + s^2) / (1 + s y_v1)``. Without the corners at this step the last ones seen are
+    used; never seen: ``h = d`` (off by ``s x``).
+    """
+    if inp.points_yv is not None and np.isfinite(inp.points_yv[:, 0]).all():
+        last_y1[0] = float(np.mean(inp.points_yv[:, 0]))
+    s = inp.slope
+    y1 = last_y1[0]
+    if not math.isfinite(y1) or 1.0 + s * y1 <= 0.1:
+        return distance_m
+    return distance_m * math.sqrt(1.0 + s * s) / (1.0 + s * y1)
 
 
 def _initial_estimate(observer, inp, dh0_m):

@@ -17,6 +17,9 @@ table-5.7       5 px pixel noise, two points (slower corrections, as the thesis 
 table-5.8       standard deviation of the error along trajectory 1, 1 px and 5 px
 table-5.10      0.5 deg calibration error on the camera mounting, two points
 table-5.12      5 % velocity bias, two points (v_meas = 0.95 v; see VELOCITY_BIAS_FRACTION)
+calibration     issue 12: camera mount pitch/roll errors (+-0.5 deg) and runway slope (+-1 %), alone and
+                combined, 1 px noise, with the mounting's self-calibration applied
+                (visland.estimation.calibration); also its estimate 1 km out against the truth
 ecc             ECC'15: the three landings ecc-1..3 with 1 % measurement noise, ecc-hg and ecc-hosm
 academic        seed 001: the single-point observer on its academic example (eq. 14-16)
 ==============  ===========================================================================
@@ -127,6 +130,18 @@ STUDIES = {
                             POINTS_THESIS + POINTS_EXTRA,
                             (Condition("5 % bias", velocity_bias_fraction=VELOCITY_BIAS_FRACTION),),
                             thesis_table="5.12"),
+    "calibration": StudySpec(
+        "calibration", "mount errors and runway slope, 1 px noise, self-calibration applied",
+        ("ccpi-hg-2p", "ekf-2l", "kf-2p", "cccj-2l"),
+        tuple(Condition(label, pixel_noise_px=1.0, calibration_error_deg=mount, slope_pct=slope,
+                        self_calibration="apply")
+              for label, mount, slope in (
+                  ("pitch +0.5", (0.0, 0.5, 0.0), 0.0), ("pitch -0.5", (0.0, -0.5, 0.0), 0.0),
+                  ("roll +0.5", (0.5, 0.0, 0.0), 0.0), ("roll -0.5", (-0.5, 0.0, 0.0), 0.0),
+                  ("slope +1 %", (0.0, 0.0, 0.0), 1.0), ("slope -1 %", (0.0, 0.0, 0.0), -1.0),
+                  ("p+0.5 r+0.5 s+1", (0.5, 0.5, 0.0), 1.0), ("p+0.5 r-0.5 s-1", (-0.5, 0.5, 0.0), -1.0),
+                  ("p-0.5 r+0.5 s+1", (0.5, -0.5, 0.0), 1.0), ("p-0.5 r-0.5 s-1", (-0.5, -0.5, 0.0), -1.0))),
+        kind="calibration"),
     "ecc": StudySpec("ecc", "ECC'15: three landings, 1 % measurement noise", ("ecc-hg", "ecc-hosm"),
                      (Condition("1 % noise", relative_noise=0.01),), scenarios=ECC_SCENARIOS, kind="ecc"),
     "academic": StudySpec("academic", "seed 001: single-point observer, academic example", (),
@@ -253,6 +268,8 @@ def run_study(name: str, out_dir=None, seed: int = 0, heading: str = "dF", echo=
         figures = _academic_study(spec, out, echo)
     elif spec.kind == "ecc":
         figures = _ecc_study(spec, out, seed, echo, heading)
+    elif spec.kind == "calibration":
+        figures = _calibration_study(spec, seed, echo)
     elif spec.kind == "std-along":
         figures = _std_along_study(spec, out, seed, echo, heading)
     else:
@@ -319,6 +336,59 @@ def _table_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: st
             "thesis": {o: {m: thesis_value(spec.thesis_table, o, key) for m, key, _ in TABLE_METRICS}
                        for o in spec.observers},
             "flags": flags, "plots": plots, **extra}
+
+
+#: Issue 12's targets for the calibration study: |mean| and std of dH - dH_hat at 100 ft (m) over
+#: the eight scenarios, and the mounting error estimated within this of the truth 1 km out (deg).
+CALIBRATION_TARGET_M = 0.3
+CALIBRATION_TARGET_DEG = 0.05
+
+
+def _calibration_study(spec: StudySpec, seed: int, echo) -> dict:
+    """Each condition on the eight scenarios: dH error at 100 ft per observer (mean, std over the
+    scenarios) and the self-calibration's error 1 km out (largest over the scenarios)."""
+    echo(f"study {spec.name}: {spec.title}")
+    echo(f"scenarios {', '.join(spec.scenarios)}; dH - dH_hat at 100 ft, mean/std over the scenarios (m); "
+         f"target |mean| and std <= {CALIBRATION_TARGET_M:g} m; mounting estimate 1 km out within "
+         f"{CALIBRATION_TARGET_DEG:g} deg (largest error over the scenarios)")
+    header = (f"{'condition':16s}" + "".join(f" | {obs:>13s}" for obs in spec.observers)
+              + f" | {'roll err':>8s} | {'pitch err':>9s} | {'slope err':>9s}")
+    echo(header)
+    echo("-" * len(header))
+    figures = {}
+    for condition in spec.conditions:
+        errors = {obs: [] for obs in spec.observers}
+        cal_err = []
+        for k, scenario in enumerate(spec.scenarios):
+            case = simulate_case(scenario, condition, seed=seed + k)
+            for obs in spec.observers:
+                _, metrics = _run(obs, case, condition.params.get(obs))
+                errors[obs].append(metrics["err_100ft_m"])
+            cal = case.prepared.calibration
+            i = int(np.argmin(np.abs(case.dx_true_m + 1000.0)))
+            truth = np.asarray(condition.calibration_error_deg if isinstance(condition.calibration_error_deg, tuple)
+                               else (condition.calibration_error_deg,) * 3, dtype=float)
+            cal_err.append([*(np.degrees(cal.mount_error_rad[i, :2]) - truth[:2]),
+                            cal.slope_pct[i] - condition.slope_pct])
+        cal_err = np.asarray(cal_err)
+        row = {}
+        cells = []
+        for obs in spec.observers:
+            agg = aggregate_at_100ft(errors[obs])
+            ok = (abs(agg["mean_err_100ft_m"]) <= CALIBRATION_TARGET_M and agg["std_err_100ft_m"] <= CALIBRATION_TARGET_M)
+            row[obs] = {"mean_err_100ft_m": agg["mean_err_100ft_m"], "std_err_100ft_m": agg["std_err_100ft_m"],
+                        "err_100ft_m_by_scenario": dict(zip(spec.scenarios, map(json_ready, errors[obs]))),
+                        "target_met": bool(ok)}
+            cells.append(f"{agg['mean_err_100ft_m']:+6.2f}/{agg['std_err_100ft_m']:4.2f}{' ' if ok else '!'}")
+        worst = np.abs(cal_err).max(axis=0)
+        row["calibration_error_1km"] = {"roll_deg": float(worst[0]), "pitch_deg": float(worst[1]),
+                                        "slope_pct": float(worst[2]),
+                                        "target_met": bool(worst[:2].max() <= CALIBRATION_TARGET_DEG)}
+        figures[condition.label] = row
+        echo(f"{condition.label:16s}" + "".join(f" | {c:>13s}" for c in cells)
+             + f" | {worst[0]:8.3f} | {worst[1]:9.3f} | {worst[2]:9.3f}")
+    echo("(! misses the target)")
+    return {"conditions": figures, "target_m": CALIBRATION_TARGET_M, "target_deg": CALIBRATION_TARGET_DEG}
 
 
 def _calibration_axes(error_deg: float, echo) -> dict:
