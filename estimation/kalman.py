@@ -74,6 +74,7 @@ class KFParams(PointsParams):
 class KF2P(_PointsObserver):
     """Kalman filter with pseudo-measurements on P' and P'' (thesis annex 5.4-5.6), via filterpy."""
 
+    substep_correction = False          # one Kalman update per measurement
     name = "kf-2p"
     # the filter's corners follow its model more than the measurements (process noise small
     # against the pseudo-measurement noise): on detected corners they lagged by metres of dY

@@ -41,6 +41,11 @@ __all__ = [
 ]
 
 
+#: Longest explicit step of a correction (s): the camera rate the gains were tuned at (25 Hz);
+#: a longer interval between frames is corrected in sub-steps (see ``_PointsObserver._step``).
+CORRECTION_SUBSTEP_S = 0.04
+
+
 # --------------------------------------------------------------------------- maths
 def points_phi(y, v) -> list:
     """``Phi(y, v)`` of thesis 4.1 for a flat list of point coordinates ``[y1, y2, y1, y2, ...]``."""
@@ -229,6 +234,9 @@ class _PointsObserver(Observer):
     #: dX, dY and the width from the observer's own corners (True) or, on frames that have
     #: them, from the measured ones (the runner reads this)
     deviations_from_own_points = True
+    #: integrate the correction in sub-steps at slow frame rates (False for a filter whose
+    #: correction is one update per measurement: kf-2p)
+    substep_correction = True
 
     def _reset(self, first: ObserverInput, dh0_m: float, measurement: np.ndarray) -> None:
         self._y = [float(measurement[0, 0]), float(measurement[0, 1]), float(measurement[1, 0]),
@@ -237,6 +245,7 @@ class _PointsObserver(Observer):
         v = first.v_runway_mps
         self._v = (float(v[0]), float(v[1]), float(v[2]))
         self._t_corrected = float(first.t_s)
+        self._shortest_interval = math.inf
         self._init_extra(first, measurement)
 
     def _init_extra(self, first: ObserverInput, measurement: np.ndarray) -> None:
@@ -252,8 +261,18 @@ class _PointsObserver(Observer):
         self._predict(d1, d2, d3, dt_s, v_old, v_new)
         self._v = v_new
         if measurement is not None:
-            dt_c = min(float(inp.t_s) - self._t_corrected, self.params.max_correction_interval_s)
-            self._correct(measurement, dt_c, v_new)
+            interval = float(inp.t_s) - self._t_corrected
+            self._shortest_interval = min(getattr(self, "_shortest_interval", math.inf), interval)
+            # a gap (missing frames) is corrected as one nominal interval; the nominal interval
+            # is the camera's (at 5 Hz, 0.2 s), not a fixed 0.1 s that would halve the gains
+            cap = max(self.params.max_correction_interval_s, 1.5 * self._shortest_interval)
+            dt_c = min(interval, cap)
+            # the correction integrated in sub-steps of at most CORRECTION_SUBSTEP_S against the
+            # held measurement (each sub-step re-reads the error): at a slow frame rate one explicit
+            # step of dt_c overshoots (a gain times 0.2 s) where the continuous correction does not
+            n = max(1, math.ceil(dt_c / CORRECTION_SUBSTEP_S - 1e-9)) if self.substep_correction else 1
+            for _ in range(n):
+                self._correct(measurement, dt_c / n, v_new)
             self._t_corrected = float(inp.t_s)
         self._eta = clip_eta(self._eta)
         return Estimate(t_s=float(inp.t_s), dh_m=1.0 / self._eta,
