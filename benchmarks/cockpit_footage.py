@@ -57,6 +57,7 @@ def main(argv=None) -> int:
     parser.add_argument("--start-m", type=float, default=2500.0)
     parser.add_argument("--stop-m", type=float, default=150.0)
     parser.add_argument("--work", default="/tmp/cockpit_footage")
+    parser.add_argument("--reuse", action="store_true", help="reuse the frames already drawn in WORK/frames")
     args = parser.parse_args(argv)
     width, height = (int(a) for a in args.size.split("x"))
 
@@ -64,16 +65,21 @@ def main(argv=None) -> int:
     from visland.contracts import read_measurements
 
     work = Path(args.work)
-    if work.exists():
+    if work.exists() and not args.reuse:
         shutil.rmtree(work)
-    (work / "frames").mkdir(parents=True)
+    (work / "frames").mkdir(parents=True, exist_ok=True)
+    for stale in work.glob("mask*.png"):
+        stale.unlink()
     camera = cockpit_camera(width, height)
     corners, visible = [], []
     for k, (_, frame, corners_uv, corners_visible, _) in enumerate(
-            cockpit_frames(camera, (args.start_m, args.stop_m), fps=args.fps)):
-        cv2.imwrite(str(work / "frames" / f"{k:05d}.png"), frame)
+            cockpit_frames(camera, (args.start_m, args.stop_m), fps=args.fps, draw=not args.reuse)):
+        if frame is not None:
+            cv2.imwrite(str(work / "frames" / f"{k:05d}.png"), frame)
         corners.append(corners_uv)
         visible.append(corners_visible)
+    if len(list((work / "frames").glob("*.png"))) != len(corners):
+        raise SystemExit(f"{work / 'frames'}: holds a different number of frames than this case; run without --reuse")
     camera.save(work / "camera.json")
     out = {"size": args.size, "fps": args.fps, "frames": len(corners)}
     assert visland(["mask", str(work), "--out", str(work / "mask.png"), "--camera", str(work / "camera.json")]) == 0

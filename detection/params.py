@@ -314,10 +314,10 @@ class DetectorParams(ParamsFile):
         pixels of the reference image side.
     static_window_s, static_min_horizon_motion_px, static_max_motion_ratio : float
         Over a sequence: a runway moves in the image with the scene. When, between a detection
-        and one up to ``static_window_s`` earlier, the horizon moved by more than
-        ``static_min_horizon_motion_px`` (the camera turned) while the detected edges' crossing
-        (the vanishing point, which moves with the horizon) moved by less than
-        ``static_max_motion_ratio`` of that, the "runway" is fixed to the camera (the
+        and one up to ``static_window_s`` earlier, the horizon moved away from the earlier
+        vanishing point by more than ``static_min_horizon_motion_px`` (the camera turned) while
+        the edges' crossing moved by less than ``static_max_motion_ratio`` of that (a world
+        vanishing point stays on the horizon, so it moves at least as far), the "runway" is fixed to the camera (the
         windshield frame, the glareshield): refused.
     identity_memory_s : float
         Over a sequence: how long the runway's place on the ground relative to the camera (its

@@ -132,18 +132,20 @@ class DetectionSequence:
         self.recent = [(t, r) for t, r in self.recent if 0.0 < t_s - t <= p.static_window_s]
         if self.recent:
             _, old = self.recent[0]
-            # a turn of the camera moves the horizon and every world point by about as much; the
-            # edges' crossing (the vanishing point) is the point that moves most plainly (near-
-            # vertical edges slide along themselves under pitch)
-            horizon_motion = _line_motion_px(self.camera, old.horizon, result.horizon)
+            # a world point on the horizon stays on it: when the camera turns, the runway's
+            # vanishing point moves at least as far as the horizon moved where it was; a crossing
+            # of lines fixed to the camera stays put, off the new horizon
             vp_then, vp_now = _edges_crossing(old, self.camera), _edges_crossing(result, self.camera)
-            edge_motion = (float(np.linalg.norm(vp_now - vp_then)) if vp_then is not None and vp_now is not None
-                           else math.inf)
+            if vp_then is None or vp_now is None or not all(math.isfinite(x) for x in result.horizon):
+                horizon_motion, edge_motion = 0.0, math.inf
+            else:
+                horizon_motion = float(abs(self.camera.line_distance_px(*result.horizon, vp_then)))
+                edge_motion = float(np.linalg.norm(vp_now - vp_then))
             if (horizon_motion > p.static_min_horizon_motion_px
                     and edge_motion < p.static_max_motion_ratio * horizon_motion):
                 self.recent.append((t_s, result))
                 return not_found(f"refused: the edges' crossing stayed within {edge_motion:.1f} px in the image while the "
-                                 f"horizon moved {horizon_motion:.0f} px: fixed to the camera (the aircraft's "
+                                 f"horizon moved {horizon_motion:.0f} px away from it: fixed to the camera (the aircraft's "
                                  "structure? mask it in camera.json, see visland mask), not the runway",
                                  roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
                                  image_size=result.image_size, elapsed_s=result.elapsed_s)
@@ -281,19 +283,6 @@ class DetectionSequence:
             if jump > jump_limit:
                 return f"the vanishing point moved {jump:.0f} px along the horizon (> {jump_limit:.0f})"
         return ""
-
-
-def _line_motion_px(camera: CameraModel, line_then, line_now) -> float:
-    """Largest distance (px) between two SPEC lines at the image's left edge, centre and right edge."""
-    if not all(math.isfinite(x) for x in (*line_then, *line_now)):
-        return 0.0
-    r_then, t_then = camera.line_to_pixel_hough(*line_then)
-    c, s = math.cos(float(t_then)), math.sin(float(t_then))
-    if abs(s) < 1e-6:
-        return 0.0
-    u = np.array([0.0, (camera.width - 1) / 2.0, camera.width - 1.0])
-    v = (float(r_then) - u * c) / s
-    return float(np.abs(camera.line_distance_px(*line_now, np.stack([u, v], axis=-1))).max())
 
 
 def _ground_geometry(result: DetectionResult, camera: CameraModel):

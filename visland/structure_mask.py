@@ -90,7 +90,7 @@ class MaskParams:
     min_area_fraction: float = 0.002
     max_hole_fraction: float = 0.01
     dilate_px: int | None = None
-    min_moving_fraction: float = 0.1
+    min_moving_fraction: float = 0.03
     max_coverage: float = 0.9
 
     def __post_init__(self):

@@ -82,10 +82,11 @@ def approach_states(scenario: str = "thesis-3", fps: float = 2.0):
 
 
 def cockpit_frames(camera: CameraModel, distances_m, scenario: str = "thesis-3", fps: float = 2.0,
-                   seed: int = 7, supersample: int = 2):
+                   seed: int = 7, supersample: int = 2, draw: bool = True):
     """Yield ``(t_s, frame, corners_uv, corners_visible, height_m)`` along the approach for each distance window.
 
     ``distances_m`` = (start, stop): frames whose distance to the threshold lies in between.
+    ``draw=False``: the labels only (``frame`` None), for frames drawn earlier.
     """
     states = approach_states(scenario, fps)
     runway = get_scenario(scenario).runway
@@ -97,6 +98,10 @@ def cockpit_frames(camera: CameraModel, distances_m, scenario: str = "thesis-3",
     labels = ideal_features(states, runway, camera.without_distortion())
     start, stop = distances_m
     for i in np.nonzero((distance <= start) & (distance >= stop))[0]:
+        if not draw:
+            yield (float(states.t_s[i]), None, labels.corners_uv[i], labels.corners_visible[i],
+                   float(-states.p_runway_m[i, 2]))
+            continue
         grey = draw_frame(scene, camera, states.p_runway_m[i], R[i], supersample=supersample, blur_sigma_px=0.5,
                           rng=np.random.default_rng(seed + int(i)))
         frame = dress(grey, polygons, seed=seed + int(i))
