@@ -16,7 +16,10 @@ def _cmd_detect(args) -> int:
 
     from visland.detection.run import detect_folder, write_measurements
     from visland.folder import FrameFolder
-    out = Path(args.out)
+    from visland.userfiles import check_output_file
+    if args.max_frames is not None and args.max_frames < 1:
+        raise ValueError(f"--max-frames must be a positive number of frames, got {args.max_frames}")
+    out = check_output_file(args.out, force=args.force)
     if out.exists() and not args.force:
         raise ValueError(f"{out}: output file exists; choose another --out or pass --force to replace it")
     if out.is_dir():

@@ -76,7 +76,8 @@ def _cmd_track(args) -> int:
     from visland.tracking.params import TrackerParams
     from visland.tracking.run import track_source
 
-    out = Path(args.out)
+    from visland.userfiles import check_output_file
+    out = check_output_file(args.out, force=args.force)
     if out.exists() and not args.force:
         raise ValueError(f"{out}: output file exists; choose another --out or pass --force to replace it")
     if out.exists() and out.is_dir():

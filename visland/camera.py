@@ -245,14 +245,9 @@ class CameraModel:
 
     @classmethod
     def load(cls, path) -> "CameraModel":
+        from visland.userfiles import read_json_object    # a byte-order mark, a folder, a list: one sentence
         path = Path(path)
-        try:
-            data = json.loads(path.read_text())
-        except FileNotFoundError:
-            raise ValueError(f"{path}: camera file not found") from None
-        except json.JSONDecodeError as error:
-            raise ValueError(f"{path}: not valid JSON ({error.msg} at line {error.lineno})") from None
-        return cls.from_json_dict(data, source=str(path), base_dir=path.parent)
+        return cls.from_json_dict(read_json_object(path, "camera file"), source=str(path), base_dir=path.parent)
 
     # ----------------------------------------------------------------- points
     def normalized_to_pixels(self, xy) -> np.ndarray:

@@ -171,3 +171,20 @@ def test_a_run_without_any_usable_frame_completes_and_says_why(rendered, tmp_pat
     assert json.loads((out / "run.json").read_text())["no_estimates"] == run["no_estimates"]
     assert any(line.startswith("no estimates from ccpi-hg-2p") and "ekf-2l" in line for line in lines)
     assert "no estimates" in (out / "report.html").read_text()
+
+
+def test_a_json_camera_file_starting_with_a_byte_order_mark_is_read(simulated, tmp_path):
+    from visland.camera import CameraModel
+    path = tmp_path / "camera.json"
+    path.write_text(BOM + (simulated / "camera.json").read_text(), encoding="utf-8")
+    assert CameraModel.load(path) == CameraModel.load(simulated / "camera.json")
+
+
+# ---------------------------------------------------------------- item 6: detect --max-frames
+@pytest.mark.parametrize("count", ["0", "-1"])
+def test_detect_refuses_a_frame_count_below_one(simulated, tmp_path, capsys, count):
+    out = tmp_path / "m.csv"
+    assert main(["detect", str(simulated), "--out", str(out), "--max-frames", count, "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert f"--max-frames must be a positive number of frames, got {count}" in err
+    assert not out.exists()
