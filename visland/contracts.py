@@ -317,10 +317,47 @@ def read_labels(path) -> Table:
     return table
 
 
+#: The corner and line columns of a measurement file (at least one pair must be there).
+_GEOMETRY_COLUMNS = tuple(c for c in LABEL_COLUMNS if c.endswith(("_px", "_rho", "_theta_rad")) and c != "dF_px")
+
+
 def read_measurements(path) -> Table:
-    """``measurements.csv``: labels schema plus source, found, reason, confidence."""
-    table = read_csv(path, MEASUREMENT_COLUMNS, text_columns=("source", "reason"),
+    """``measurements.csv``: labels schema plus source, found, reason, confidence.
+
+    A file from another tool needs only ``t_s`` and the features it has (corners and/or lines,
+    SPEC columns); what it lacks defaults: ``frame`` the row index, ``source`` "external",
+    ``found`` 1 where the row holds a corner or a line, ``reason`` empty, ``confidence`` empty,
+    ``*_visible`` 1 where the corner's two coordinates are given, other features empty.
+    """
+    table = read_csv(path, ("t_s",), text_columns=("source", "reason"),
                      optional_empty=_FEATURE_COLUMNS | {"confidence"})
+    present = [c for c in _GEOMETRY_COLUMNS if c in table]
+    if not present:
+        raise ValueError(f"{table.path}: no corner or line columns (e.g. near_left_u_px, near_left_v_px, "
+                         "left_rho, left_theta_rad); nothing to estimate from")
+    n = table.n_rows
+    order = list(table.column_order)
+    def add(column, values):
+        table[column] = values
+        order.append(column)
+    for column in LABEL_COLUMNS + LABEL_EXTRA_COLUMNS:
+        if column not in table and column not in ("frame", "t_s") and not column.endswith("_visible"):
+            add(column, np.full(n, np.nan))
+    for corner in CORNER_NAMES:
+        if f"{corner}_visible" not in table:
+            add(f"{corner}_visible", (np.isfinite(table[f"{corner}_u_px"])
+                                      & np.isfinite(table[f"{corner}_v_px"])).astype(float))
+    if "frame" not in table:
+        add("frame", np.arange(n, dtype=float))
+    if "source" not in table:
+        add("source", np.full(n, "external"))
+    if "found" not in table:
+        add("found", np.any([np.isfinite(table[c]) for c in present], axis=0).astype(float))
+    if "reason" not in table:
+        add("reason", np.full(n, ""))
+    if "confidence" not in table:
+        add("confidence", np.full(n, np.nan))
+    table.column_order = order
     check_time_column(table)
     bad = np.nonzero(~np.isin(table["found"], (0.0, 1.0)))[0]
     if bad.size:

@@ -84,6 +84,38 @@ def list_frame_files(frames_dir: Path) -> list[Path]:
     return files
 
 
+def _frames_in_csv_order(table, frames_csv: Path, files: list[Path], frames_dir: Path) -> list[Path]:
+    """The frame files in the order of ``frames.csv``, whose ``frame`` column holds either the
+    0-based index of each image in name order or its file name (relative to ``frames/``).
+
+    Every image of ``frames/`` must be listed once (nothing is skipped silently); a name that
+    is not there, or an index out of order, is one sentence naming the row.
+    """
+    values = [str(f).strip() for f in table["frame"]]
+    n = len(files)
+    if all(v.lstrip("-").isdigit() for v in values):
+        index = np.array([int(v) for v in values])
+        if len(index) != n or not np.array_equal(index, np.arange(n)):
+            raise ValueError(f"{frames_csv}: lists {len(index)} frames 0..{len(index) - 1} but {frames_dir} holds "
+                             f"{n} images (column 'frame' holds 0-based indices in name order, or file names)")
+        return files
+    by_name = {f.name: f for f in files}
+    ordered, seen = [], set()
+    for row, name in enumerate(values, start=2):
+        path = by_name.get(Path(name).name) if Path(name).parent in (Path("."), Path("frames")) else None
+        if path is None:
+            raise ValueError(f"{frames_csv}: line {row}: frame {name!r} is not an image of {frames_dir}")
+        if path.name in seen:
+            raise ValueError(f"{frames_csv}: line {row}: frame {name!r} is listed twice")
+        seen.add(path.name)
+        ordered.append(path)
+    if len(ordered) != n:
+        missing = sorted(set(by_name) - seen)
+        raise ValueError(f"{frames_csv}: names {len(ordered)} of the {n} images of {frames_dir}; not listed: "
+                         f"{', '.join(missing[:3])}{' ...' if len(missing) > 3 else ''}")
+    return ordered
+
+
 class FrameFolder:
     """A validated frame folder: frame files, their times, telemetry at those times, camera.
 
@@ -108,13 +140,7 @@ class FrameFolder:
         frames_csv = Path(frames_csv) if frames_csv else self.root / "frames.csv"
         if frames_csv.exists():
             table = read_frames_csv(frames_csv)
-            try:
-                index = np.array([int(f) for f in table["frame"]])
-            except ValueError:
-                raise ValueError(f"{frames_csv}: column 'frame' must hold 0-based frame indices") from None
-            if len(index) != n or not np.array_equal(index, np.arange(n)):
-                raise ValueError(f"{frames_csv}: lists {len(index)} frames 0..{len(index) - 1} but "
-                                 f"{self.root / 'frames'} holds {n} images")
+            self.frame_files = _frames_in_csv_order(table, frames_csv, self.frame_files, self.root / "frames")
             self.times_s = table["t_s"]
         else:
             fps = 25.0 if fps is None else float(fps)

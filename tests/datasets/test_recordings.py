@@ -1,0 +1,65 @@
+"""Files people have (issue 15 items 1 and 2): frames.csv naming the images, and measurement
+files from another tool with only the columns that matter."""
+import numpy as np
+import pytest
+
+from visland.camera import CameraModel
+from visland.contracts import read_measurements
+from visland.folder import FrameFolder
+
+
+def _folder(tmp_path, names):
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for name in names:
+        (frames / name).write_bytes(b"")
+    CameraModel.from_fov(64, 48, 50.0).save(tmp_path / "camera.json")
+    return tmp_path
+
+
+def test_frames_csv_may_name_the_image_files(tmp_path):
+    folder = _folder(tmp_path, ["a_010.png", "a_002.png", "a_100.png"])
+    # the file's order (times increasing), not the names' order
+    (folder / "frames.csv").write_text("frame,t_s\na_002.png,4.92\nframes/a_010.png,5.00\na_100.png,5.12\n")
+    frames = FrameFolder(folder, require_telemetry=False)
+    assert [f.name for f in frames.frame_files] == ["a_002.png", "a_010.png", "a_100.png"]
+    assert np.allclose(frames.times_s, [4.92, 5.00, 5.12])
+
+
+def test_frames_csv_indices_still_work(tmp_path):
+    folder = _folder(tmp_path, ["b.png", "a.png"])
+    (folder / "frames.csv").write_text("frame,t_s\n0,0.0\n1,0.04\n")
+    assert [f.name for f in FrameFolder(folder, require_telemetry=False).frame_files] == ["a.png", "b.png"]
+
+
+@pytest.mark.parametrize("rows, message", [
+    ("a.png,0\nc.png,0.1\n", "line 3: frame 'c.png' is not an image of"),
+    ("a.png,0\na.png,0.1\n", "line 3: frame 'a.png' is listed twice"),
+    ("a.png,0\n", "names 1 of the 2 images"),
+    ("0,0\n2,0.1\n", "lists 2 frames 0..1 but"),
+])
+def test_frames_csv_names_that_do_not_match_are_one_sentence(tmp_path, rows, message):
+    folder = _folder(tmp_path, ["a.png", "b.png"])
+    (folder / "frames.csv").write_text("frame,t_s\n" + rows)
+    with pytest.raises(ValueError) as error:
+        FrameFolder(folder, require_telemetry=False)
+    assert message in str(error.value) and "frames.csv" in str(error.value)
+
+
+def test_a_measurement_file_from_elsewhere_needs_only_time_and_features(tmp_path):
+    path = tmp_path / "corners.csv"
+    path.write_text("t_s,near_left_u_px,near_left_v_px,near_right_u_px,near_right_v_px\n"
+                    "0.0,10.5,40.0,20.5,40.2\n0.04,,,,\n0.08,10.7,40.4,20.9,40.6\n")
+    table = read_measurements(path)
+    assert list(table["frame"]) == [0, 1, 2]
+    assert list(table["found"]) == [1, 0, 1]
+    assert set(table["source"]) == {"external"}
+    assert list(table["near_left_visible"]) == [1, 0, 1] and list(table["far_left_visible"]) == [0, 0, 0]
+    assert np.isnan(table["left_rho"]).all() and np.isnan(table["confidence"]).all()
+
+
+def test_a_measurement_file_without_any_feature_is_refused(tmp_path):
+    path = tmp_path / "m.csv"
+    path.write_text("t_s,dF_px\n0.0,1.0\n")
+    with pytest.raises(ValueError, match="no corner or line columns"):
+        read_measurements(path)
