@@ -173,6 +173,10 @@ def _cmd_mask(args) -> int:
     camera_dir = Path(args.camera).parent if args.camera else out.parent
     relative = os.path.relpath(out.resolve(), camera_dir.resolve())
     where = args.camera if args.camera else str(camera_dir / "camera.json")
+    if result.coverage == 0.0:
+        print("no structure found (nothing steady and dark or edged touches the image border): no mask needed, "
+              "or draw polygons by hand")
+        return 0
     print(f"add to {where}: \"mask\": \"{relative}\"")
     return 0
 

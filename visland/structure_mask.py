@@ -3,8 +3,8 @@
 The aircraft's structure is fixed to the camera, so it does not move with the scene: over frames
 sampled across an approach, its pixels keep their grey level while the ground slides past.
 Low temporal variance alone is not enough, though: a uniform sky is just as steady, and so is
-the horizon in steady flight. The rule, pixel by pixel, on frames smoothed by a Gaussian of
-``blur_sigma_px``:
+the horizon in steady flight. The rule, pixel by pixel, on frames divided by their exposure
+gain (:func:`exposure_gains`) and smoothed by a Gaussian of ``blur_sigma_px``:
 
 =====================  ==========================================================================
 test                   definition
@@ -25,7 +25,9 @@ So a bright static area counts only along static edges: the interior of a unifor
 taken. The candidates are then cleaned up: an opening by a disc of radius ``open_fraction`` of
 the short side removes thin bands (the horizon of a steady flight, static cloud edges, which
 qualify along their edge only); only connected parts that touch the image border (structure
-enters the view from outside it) and cover at least ``min_area_fraction`` of the image are kept;
+enters the view from outside it; parts within ``2 link_px`` of each other count as connected,
+since the seam between two static parts is itself unsteady when the camera vibrates) and cover
+at least ``min_area_fraction`` of the image are kept;
 holes up to ``max_hole_fraction`` of the image are filled (reflections, instruments), larger
 ones are the view through the windshield and stay open; finally the mask is dilated by
 ``dilate_px`` (a margin against vibration and the structure's own edge).
@@ -44,7 +46,8 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-__all__ = ["MaskParams", "StructureMask", "propose_structure_mask", "temporal_statistics", "mask_picture"]
+__all__ = ["MaskParams", "StructureMask", "propose_structure_mask", "temporal_statistics", "exposure_gains",
+           "mask_picture"]
 
 
 @dataclass(frozen=True)
@@ -65,6 +68,8 @@ class MaskParams:
         Smallest ratio of the mean image's gradient to the mean of the frames' gradients.
     edge_reach_px : int
         How far from a static edge a bright static pixel may be, pixels.
+    link_px : int
+        Parts closer than twice this are one part when deciding which touch the image border.
     open_fraction : float
         Radius of the opening disc as a fraction of the short side (at least 2 px).
     min_area_fraction : float
@@ -78,6 +83,10 @@ class MaskParams:
         to tell the structure from).
     max_coverage : float
         A proposed mask above this fraction of the image is refused.
+    compensate_exposure : bool
+        Divide each frame by its exposure gain (:func:`exposure_gains`) first: a camera's
+        automatic exposure otherwise makes the structure's grey levels vary with the scene's
+        brightness.
     """
 
     blur_sigma_px: float = 1.0
@@ -86,17 +95,19 @@ class MaskParams:
     edge_min_grad: float = 6.0
     edge_static_ratio: float = 0.6
     edge_reach_px: int = 3
+    link_px: int = 3
     open_fraction: float = 0.008
     min_area_fraction: float = 0.002
     max_hole_fraction: float = 0.01
     dilate_px: int | None = None
     min_moving_fraction: float = 0.03
     max_coverage: float = 0.9
+    compensate_exposure: bool = True
 
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
-            if f.name == "dilate_px" and value is None:
+            if (f.name == "dilate_px" and value is None) or f.name == "compensate_exposure":
                 continue
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
                 raise ValueError(f"mask parameter {f.name} must be a non-negative number, got {value!r}")
@@ -141,6 +152,24 @@ class StructureMask:
         return (f"{self.frames} frames: {100 * self.moving_fraction:.1f} % of the image moves with the scene, "
                 f"{100 * self.static_fraction:.1f} % is static; dark below grey {self.dark_level:.0f} "
                 f"(scene median {self.scene_grey:.0f}); proposed mask: {100 * self.coverage:.1f} % of the image")
+
+
+def exposure_gains(frames) -> np.ndarray:
+    """Each frame's exposure relative to the sequence: median over pixels of frame / temporal median.
+
+    Computed on frames reduced 4x (area averaging) and on pixels brighter than 20 grey levels of
+    the median image (the ratio of near-black pixels is noise). The moving scene's ratios scatter
+    around 1, the static parts' ratios are the gain itself: the median follows the camera's
+    automatic exposure as long as the scene does not change its overall brightness.
+    """
+    import cv2  # heavy import kept local: the core must start fast
+    small = np.stack([cv2.resize(np.asarray(f, np.float32), None, fx=0.25, fy=0.25, interpolation=cv2.INTER_AREA)
+                      for f in frames])
+    reference = np.median(small, axis=0)
+    lit = reference > 20.0
+    if lit.sum() < 16:
+        return np.ones(len(frames))
+    return np.array([float(np.median(s[lit] / reference[lit])) for s in small])
 
 
 def temporal_statistics(frames, blur_sigma_px: float = 1.0):
@@ -212,7 +241,9 @@ def propose_structure_mask(frames, params: MaskParams | None = None, source: str
     params = params or MaskParams()
     if len(frames) < 5:
         raise ValueError(f"{source}: {len(frames)} frame(s) sampled; at least 5 spread over the footage are needed")
-    mean, std, mean_gradient, count = temporal_statistics(frames, params.blur_sigma_px)
+    gains = exposure_gains(frames) if params.compensate_exposure else np.ones(len(frames))
+    mean, std, mean_gradient, count = temporal_statistics(
+        (np.asarray(f, np.float32) / g for f, g in zip(frames, gains)), params.blur_sigma_px)
     height, width = mean.shape
     n_pixels = height * width
     short_side = min(height, width)
@@ -238,14 +269,18 @@ def propose_structure_mask(frames, params: MaskParams | None = None, source: str
     radius = max(2, int(round(params.open_fraction * short_side)))
     candidate = cv2.morphologyEx(candidate, cv2.MORPH_OPEN, _disc(radius))
 
-    # keep the parts attached to the image border (the airframe enters from outside the view)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(candidate, connectivity=8)
+    # keep the parts attached to the image border (the airframe enters from outside the view);
+    # parts within 2 link_px of each other count as attached: where two static parts of
+    # different grey meet (wiper over frame), vibration makes the seam itself unsteady
+    link = int(round(params.link_px))
+    linked = cv2.dilate(candidate, _disc(link)) if link > 0 else candidate
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(linked, connectivity=8)
     keep = np.zeros(n, bool)
     for k in range(1, n):
-        x, y, w, h, area = stats[k]
+        x, y, w, h, _ = stats[k]
         touches = x == 0 or y == 0 or x + w == width or y + h == height
-        keep[k] = touches and area >= params.min_area_fraction * n_pixels
-    mask = keep[labels]
+        keep[k] = touches and np.count_nonzero(candidate[labels == k]) >= params.min_area_fraction * n_pixels
+    mask = keep[labels] & (candidate > 0)
 
     # fill small holes (reflections, instruments); the view through the windshield stays open
     n, labels, stats, _ = cv2.connectedComponentsWithStats((~mask).astype(np.uint8), connectivity=4)

@@ -28,8 +28,13 @@ def structure_truth(size=SIZE):
     return canvas
 
 
-def cockpit_frames(n_frames=30, seed=0, size=SIZE):
-    """``n_frames`` grey uint8 frames and the structure truth (bool)."""
+def cockpit_frames(n_frames=30, seed=0, size=SIZE, exposure_swing=0.02, shake_px=0):
+    """``n_frames`` grey uint8 frames and the structure truth (bool, of the unshaken frame).
+
+    ``exposure_swing``: relative amplitude of the automatic exposure's swing over the frames;
+    ``shake_px``: the whole frame shifted by a random whole number of pixels in
+    ``[-shake_px, shake_px]`` each way (a hand-held camera).
+    """
     rng = np.random.default_rng(seed)
     width, height = size
     step = np.array([11, 6])
@@ -46,7 +51,11 @@ def cockpit_frames(n_frames=30, seed=0, size=SIZE):
         image[v < HORIZON_V] = 215.0 - 0.15 * v[v < HORIZON_V]              # sky: bright, smooth gradient
         image[frame_part] = 32.0
         image[wiper] = 58.0
-        image *= 1.0 + 0.02 * np.sin(1.3 * k)                                  # exposure flicker
+        image *= 1.0 + exposure_swing * np.sin(1.3 * k)                        # automatic exposure
         image += rng.normal(0.0, 2.0, image.shape)
+        if shake_px:
+            du, dv = rng.integers(-shake_px, shake_px + 1, 2)
+            image = cv2.warpAffine(image, np.float32([[1, 0, du], [0, 1, dv]]), (width, height),
+                                   borderMode=cv2.BORDER_REPLICATE)
         frames.append(np.clip(np.round(image), 0, 255).astype(np.uint8))
     return frames, canvas > 0
