@@ -141,14 +141,15 @@ def test_rendered_approach_measured_and_estimated_against_labels_and_truth(gener
     assert np.nanmax(near[before_500m]) < 1.7                      # measured 1.34 px
 
     # estimates against the truth (observers start 20 % above the true height, 90 m at the start);
-    # measured at 100 ft: dH ccpi-hg-2p -0.13 (detection) / -0.90 (anchored), cccj-2l 0.91 / 0.81,
-    # ecc-hg -1.52 / -1.41 m; dY ccpi-hg-2p 0.002 / 0.061 m
-    limits_dh_m = {"ccpi-hg-2p": (0.3, 1.2), "cccj-2l": (1.2, 1.1), "ecc-hg": (2.0, 1.9)}
+    # measured at 100 ft since 3b161bf (point observers correct at every 5 Hz frame): dH ccpi-hg-2p
+    # -0.95 (detection) / -1.21 (anchored), cccj-2l 0.90 / 0.81, ecc-hg -1.53 / -1.42 m; dY ccpi-hg-2p
+    # 0.043 / 0.085 m (before it, with every gain halved at 5 Hz: ccpi-hg-2p -0.13 / -0.90 m)
+    limits_dh_m = {"ccpi-hg-2p": (1.2, 1.5), "cccj-2l": (1.2, 1.1), "ecc-hg": (2.0, 1.9)}
     for k, source in enumerate(("detection", "anchored")):
         metrics = json.loads((out[source] / "metrics.json").read_text())
         for name, limits in limits_dh_m.items():
             assert abs(metrics["observers"][name]["err_100ft_m"]) < limits[k], (source, name)
-        assert abs(metrics["deviations"]["ccpi-hg-2p"]["dY_err_100ft_m"]) < (0.03, 0.1)[k]
+        assert abs(metrics["deviations"]["ccpi-hg-2p"]["dY_err_100ft_m"]) < (0.06, 0.12)[k]
 
 
 @pytest.mark.slow
