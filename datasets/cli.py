@@ -17,7 +17,8 @@ def _cmd_process(args) -> int:
     options = ProcessOptions(source=args.source, observers=_observers(args.observer), camera=args.camera,
                              telemetry=args.telemetry, frames_csv=args.frames_csv, fps=args.fps,
                              initial_height_m=args.initial_height, initial_error=args.initial_error,
-                             init=args.init, report=not args.no_report, quiet=args.quiet, params_file=args.params)
+                             init=args.init, report=not args.no_report, quiet=args.quiet, params_file=args.params,
+                             time_offset_s=args.time_offset, estimate_offset=args.estimate_offset)
     process_input(args.input, args.out, options, force=args.force)
     return 0
 
@@ -106,6 +107,10 @@ def register(subparsers):
     p.add_argument("--initial-error", type=float, default=0.2, metavar="FRACTION",
                    help="with truth and no --initial-height: start this fraction above the truth (default 0.2)")
     p.add_argument("--params", default=None, metavar="FILE", help="observer parameters (TOML or JSON)")
+    p.add_argument("--time-offset", type=float, default=0.0, metavar="S",
+                   help="seconds added to the telemetry's times to put them on the frames' clock (default 0)")
+    p.add_argument("--estimate-offset", action="store_true",
+                   help="estimate the telemetry-to-frames clock offset from the horizon's roll in the frames")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")

@@ -51,6 +51,8 @@ class ProcessOptions:
     report: bool = True
     quiet: bool = False
     params_file: str | None = None
+    time_offset_s: float = 0.0        # added to the telemetry's times (visland.clocks)
+    estimate_offset: bool = False
 
     def __post_init__(self):
         from visland.datasets.measure import parse_source
@@ -65,6 +67,28 @@ class ProcessOptions:
                              f"dh_m), got {self.initial_height_m!r}")
         if not (math.isfinite(self.initial_error) and -0.9 < self.initial_error < 10):
             raise ValueError(f"--initial-error must lie in (-0.9, 10), got {self.initial_error!r}")
+        if not (math.isfinite(self.time_offset_s) and abs(self.time_offset_s) <= 60.0):
+            raise ValueError(f"--time-offset must be a number of seconds within +-60, got {self.time_offset_s!r}")
+
+
+def _align_clocks(source, options: ProcessOptions, echo) -> None:
+    """Shift the telemetry onto the frames' clock: by ``--time-offset``, or by the offset
+    estimated from the frames (``--estimate-offset``, :mod:`visland.clocks`); an estimate the
+    data do not support is said and the given offset (default 0) is used."""
+    offset = options.time_offset_s
+    if options.estimate_offset:
+        from visland.clocks import estimate_time_offset
+        try:
+            found = estimate_time_offset(source)
+        except ValueError as error:
+            echo(f"clock offset not estimated: {error}; using {offset:+.3f} s")
+        else:
+            offset = found.offset_s
+            echo(f"clock offset estimated from the horizon's roll against the telemetry's: {offset:+.3f} s "
+                 f"+- {found.sigma_s:.3f} s (one sigma, {found.frames_used} frames, residual "
+                 f"{found.residual_deg:.2f} deg)")
+    if offset:
+        source.shift_telemetry(offset)
 
 
 def _scenario_of(source) -> str | None:
@@ -123,6 +147,7 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
     _check_paths(input_path, out_dirs, options, force)
     source = open_source(input_path, camera=options.camera, telemetry=options.telemetry,
                          frames_csv=options.frames_csv, fps=options.fps)
+    _align_clocks(source, options, echo)
     if source.truth is None and options.initial_height_m is None:
         raise ValueError(f"{input_path}: no truth.csv, so give the initial height guess with --initial-height M")
     _check_agreement(source, options)

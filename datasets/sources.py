@@ -43,6 +43,16 @@ class FrameSource:
         """Yield ``(index, image or None, reason or None)`` in order."""
         raise NotImplementedError
 
+    def shift_telemetry(self, offset_s: float) -> None:
+        """Put the telemetry on the frames' clock: ``offset_s`` seconds added to its times
+        (:mod:`visland.clocks`), and interpolated again at the frame times."""
+        table = self.telemetry
+        table["t_s"] = np.asarray(table["t_s"], float) + float(offset_s)
+        self.inertial = interpolate_telemetry(table, self.times_s,
+                                              source=f"{table.path} (times shifted by {offset_s:+.3f} s)")
+        if hasattr(self, "folder"):
+            self.folder.inertial = self.inertial
+
 
 class FolderSource(FrameSource):
     """A SPEC frame folder (see :class:`visland.folder.FrameFolder`)."""
