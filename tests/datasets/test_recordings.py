@@ -109,3 +109,20 @@ def test_the_clock_offset_is_read_from_the_horizon_s_roll():
     assert found.sigma_s < 0.02
     with pytest.raises(ValueError, match="too little roll motion"):
         estimate_time_offset(_RecordedApproach(lag_s=0.3, level=True))
+
+
+def test_time_offset_moves_the_telemetry_onto_the_frames_clock(tmp_path):
+    """A roll step stamped at 1.0 s in the telemetry, shifted by +0.5 s: the frames see it at 1.5 s."""
+    from visland.datasets.sources import open_source
+    folder = _folder(tmp_path, [f"{k:03d}.png" for k in range(31)])
+    (folder / "frames.csv").write_text("frame,t_s\n" + "".join(f"{k},{0.1 * k:.1f}\n" for k in range(31)))
+    rows = ["t_s,roll_deg,pitch_deg,heading_deg,p_dps,q_dps,r_dps,vn_mps,ve_mps,vd_mps"]
+    for k in range(61):
+        t = -1.0 + 0.1 * k
+        rows.append(f"{t:.1f},{10.0 if t >= 1.0 else 0.0},0,0,0,0,0,70,0,3")
+    (folder / "telemetry.csv").write_text("\n".join(rows) + "\n")
+    source = open_source(folder)
+    assert np.degrees(source.inertial.roll_rad[10]) == pytest.approx(10.0)
+    source.shift_telemetry(0.5)
+    roll = np.degrees(source.inertial.roll_rad)
+    assert roll[14] == pytest.approx(0.0) and roll[15] == pytest.approx(10.0)
