@@ -19,8 +19,16 @@ def _cmd_process(args) -> int:
                              initial_height_m=args.initial_height, initial_error=args.initial_error,
                              init=args.init, report=not args.no_report, quiet=args.quiet, params_file=args.params,
                              time_offset_s=args.time_offset, estimate_offset=args.estimate_offset)
-    process_input(args.input, args.out, options, force=args.force)
-    return 0
+    if len(args.input) > 1:
+        for flag, value in (("--telemetry", args.telemetry), ("--camera", args.camera), ("--frames-csv", args.frames_csv)):
+            if value:
+                raise ValueError(f"{flag} names one file, but a batch of {len(args.input)} inputs takes each input's own")
+    if len(args.input) == 1:
+        process_input(args.input[0], args.out, options, force=args.force)
+        return 0
+    from visland.datasets.batch import process_batch
+    index = process_batch(args.input, args.out, options, force=args.force)
+    return 0 if index["done"] else 2
 
 
 def _cmd_compare(args) -> int:
@@ -89,7 +97,9 @@ def register(subparsers):
         description="Process a frame folder (SPEC contract) or a video: measure the runway in every frame "
                     "(detection, tracking, anchored tracking, or the folder's exact labels), run the observers, "
                     "score them against truth.csv when present, and write a self-contained HTML report.")
-    p.add_argument("input", metavar="INPUT", help="frame folder (frames/, telemetry.csv, camera.json, ...) or video file")
+    p.add_argument("input", metavar="INPUT", nargs="+",
+                   help="frame folder (frames/, telemetry.csv, camera.json, ...) or video file; several make a batch: "
+                        "one run per input under --out, index.html linking them, and the compare tables")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (refused if it exists, unless --force)")
     p.add_argument("--telemetry", metavar="FILE", help="telemetry.csv (default: INPUT/telemetry.csv or beside the video)")
     p.add_argument("--camera", metavar="FILE", help="camera.json (default: INPUT/camera.json or beside the video)")

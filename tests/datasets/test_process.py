@@ -272,3 +272,27 @@ def test_a_tracker_policy_is_a_source_of_its_own(generated, tmp_path):
     run = process_input(generated, tmp_path / "memo", _quiet(source="tracking:every_frame", report=False),
                         echo=lambda s: None)
     assert run["source"] == "tracking:every_frame" and run["n_frames"] > 0
+
+
+@pytest.mark.slow
+def test_a_batch_of_recordings_with_one_bad_input(simulated, tmp_path):
+    """Three inputs, one without telemetry: two runs, one failed line in the index, a comparison."""
+    import shutil
+
+    from visland.datasets.batch import process_batch
+    inputs = []
+    for name in ("approach-a", "approach-b", "broken"):
+        shutil.copytree(simulated, tmp_path / "in" / name)
+        inputs.append(tmp_path / "in" / name)
+    (tmp_path / "in" / "broken" / "telemetry.csv").unlink()
+    index = process_batch(inputs, tmp_path / "batch", _quiet(source="ideal", report=False), echo=lambda s: None)
+    assert (index["done"], index["failed"]) == (2, 1)
+    failed = [r for r in index["runs"] if r["status"] == "failed"]
+    assert failed[0]["name"] == "broken" and "telemetry" in failed[0]["reason"]
+    for run in index["runs"][:2]:
+        assert (tmp_path / "batch" / run["name"] / "estimates.csv").exists()
+        assert abs(run["dh_err_100ft_m"]) < 0.01                # exact measurements
+    page = (tmp_path / "batch" / "index.html").read_text()
+    assert "approach-a" in page and "failed:" in page
+    assert index["comparison"] == "compare" and any((tmp_path / "batch" / "compare").iterdir())
+    assert json.loads((tmp_path / "batch" / "index.json").read_text())["done"] == 2
