@@ -105,6 +105,17 @@ def simulation_options_from_args(args, camera=None):
                              calibration_error_deg=args.calibration_error, imu=imu, seed=args.seed)
 
 
+def _cmd_telemetry(args) -> int:
+    from pathlib import Path
+    from visland.telemetry_map import convert_telemetry
+    out = Path(args.out)
+    if out.exists() and not args.force:
+        raise ValueError(f"{out}: output file exists; choose another --out or pass --force to replace it")
+    n = convert_telemetry(args.csv, args.map, out)
+    print(f"wrote {out}: {n} rows in the SPEC columns")
+    return 0
+
+
 def _cmd_simulate(args) -> int:
     from visland.simulate import run_simulation, summary_lines, write_simulation
     scenario = scenario_from_args(args)
@@ -133,6 +144,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--pixel-noise", type=float, default=0.0, metavar="PX",
                    help="white Gaussian noise on the corner pixels (thesis 5.2.2.1: 1 or 5 px)")
     p.set_defaults(func=_cmd_simulate)
+
+    p = sub.add_parser("telemetry", help="convert a telemetry CSV with other column names and units to the SPEC one",
+                       description="Write the SPEC telemetry.csv from a CSV with other column names and units "
+                                   "(radians, knots, feet per minute, milliseconds, an up velocity...) through a "
+                                   "small TOML column map (see README, 'Telemetry as people have it').")
+    p.add_argument("csv", metavar="CSV", help="the telemetry file as recorded")
+    p.add_argument("--map", required=True, metavar="TOML", help="column map: [columns] spec = { column, unit, sign }")
+    p.add_argument("--out", required=True, metavar="FILE", help="telemetry.csv to write (refused if it exists)")
+    p.add_argument("--force", action="store_true", help="replace an existing output file")
+    p.set_defaults(func=_cmd_telemetry)
 
     bench = sub.add_parser("bench", help="time a stage: render, detect, track or estimate")
     bench_sub = bench.add_subparsers(dest="target", metavar="TARGET")
