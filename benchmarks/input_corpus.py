@@ -509,6 +509,12 @@ def _flagged(out: Path, text: str) -> bool:
     if run.exists():
         data = json.loads(run.read_text())
         return bool(data.get("n_flagged") or data.get("no_estimates"))
+    for csv in (out / "run" / "measurements.csv", out / "m.csv"):
+        if csv.exists():
+            from visland.contracts import read_csv
+            table = read_csv(csv, (), text_columns=("source", "reason"))
+            if "found" in table and (table["found"] == 0).any():
+                return True
     csv = out / "m.csv"
     if csv.exists():
         content = csv.read_text()

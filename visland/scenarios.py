@@ -90,6 +90,8 @@ class Scenario:
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name.strip():
             raise ValueError("scenario name must be a non-empty string")
+        if not isinstance(self.description, str):
+            raise ValueError(f"scenario {self.name}: description must be text, got {self.description!r}")
         _check_range("dx_m", self.dx_m, -12000.0, -1500.0)
         _check_range("dy_m", self.dy_m, -1000.0, 1000.0)
         _check_range("dgs_m", self.dgs_m, -150.0, 150.0)

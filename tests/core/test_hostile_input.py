@@ -230,3 +230,26 @@ def test_compare_says_why_a_run_has_no_errors_at_the_heights(simulated, tmp_path
     (run / "run.json").write_text("[1, 2]")
     assert main(["compare", str(run), "--out", str(tmp_path / "cmp3")]) == 2
     assert "run.json: the run description must hold a JSON object {...}, found a list" in capsys.readouterr().err
+
+
+def test_a_scenario_description_of_the_wrong_type_is_refused(tmp_path, capsys):
+    path = tmp_path / "s.toml"
+    path.write_text('name = "s"\ndx_m = -1600.0\ndy_m = 20.0\ndgs_m = 0.0\ndpsi_deg = 1.0\ndescription = [1]\n')
+    assert main(["simulate", "--scenario", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert f"{path}: scenario s: description must be text, got [1]" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["detect", "track"])
+def test_detect_and_track_refuse_an_implausible_camera_first(simulated, tmp_path, capsys, command):
+    folder = tmp_path / "sim"
+    shutil.copytree(simulated, folder)
+    (folder / "frames").mkdir()
+    (folder / "frames" / "000.png").write_bytes(b"")
+    for name in ("truth.csv", "labels.csv"):                    # one frame: keep its row only
+        lines = (folder / name).read_text().splitlines()
+        (folder / name).write_text("\n".join(lines[:2]) + "\n")
+    data = json.loads((folder / "camera.json").read_text())
+    data["fx"] = 1e9
+    (folder / "camera.json").write_text(json.dumps(data))
+    assert main([command, str(folder), "--out", str(tmp_path / "m.csv")]) == 2
+    assert f"{folder / 'camera.json'}: field 'fx' is 1e+09 px, outside the plausible" in capsys.readouterr().err
