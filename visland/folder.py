@@ -75,10 +75,15 @@ def interpolate_telemetry(telemetry: Table, times_s, source: str = "telemetry.cs
 
 
 def list_frame_files(frames_dir: Path) -> list[Path]:
-    """Image files of a frames folder, sorted by name."""
+    """Entries of a frames folder named as images (.png, .jpg), sorted by name.
+
+    An entry named as an image that is not one (a folder, a dangling link, a link loop) stays
+    in the list: it is a frame that cannot be used, flagged by :meth:`FrameFolder.read_frame`,
+    and every later frame keeps its index and time.
+    """
     if not frames_dir.is_dir():
         raise ValueError(f"{frames_dir}: frames folder not found")
-    files = sorted(p for p in frames_dir.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
+    files = sorted(p for p in frames_dir.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
     if not files:
         raise ValueError(f"{frames_dir}: no .png or .jpg images in the frames folder")
     return files
@@ -184,7 +189,13 @@ class FrameFolder:
         """
         import cv2  # heavy import kept local: the core must start fast
         path = self.frame_files[index]
-        image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if gray else cv2.IMREAD_COLOR)
+        problem = _not_a_file(path)
+        if problem:
+            return None, f"frame {index} ({path.name}): {problem}, not an image"
+        try:
+            image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if gray else cv2.IMREAD_COLOR)
+        except cv2.error:                   # e.g. a header declaring more pixels than OpenCV allows
+            return None, f"frame {index} ({path.name}): unreadable image (OpenCV refuses its header)"
         if image is None:
             return None, f"frame {index} ({path.name}): unreadable image"
         height, width = image.shape[:2]
@@ -194,6 +205,22 @@ class FrameFolder:
         if not gray:
             image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
         return image, None
+
+
+def _not_a_file(path: Path) -> str:
+    """Why ``path`` is not a regular file ("" when it is one)."""
+    if path.is_symlink():
+        try:
+            path.resolve(strict=True)
+        except FileNotFoundError:
+            return "a dangling link"
+        except (RuntimeError, OSError):
+            return "a link loop"
+    if path.is_dir():
+        return "a folder"
+    if not path.is_file():
+        return "not a regular file"
+    return ""
 
 
 def as_grey(image):

@@ -188,3 +188,32 @@ def test_detect_refuses_a_frame_count_below_one(simulated, tmp_path, capsys, cou
     err = capsys.readouterr().err
     assert f"--max-frames must be a positive number of frames, got {count}" in err
     assert not out.exists()
+
+
+# ---------------------------------------------------------------- item 9: entries of frames/ that are not images
+def test_frame_entries_that_are_not_files_are_flagged_and_keep_the_times(rendered, tmp_path):
+    import cv2
+    from visland.contracts import read_measurements
+    folder = tmp_path / "odd"
+    shutil.copytree(rendered, folder)
+    for name in ("frames.csv", "truth.csv", "labels.csv"):          # times from --fps: index / fps
+        (folder / name).unlink()
+    frames = sorted((folder / "frames").iterdir())
+    n = len(frames)
+    frames[3].unlink()
+    frames[3].mkdir()                                              # a folder named as a frame
+    frames[5].unlink()
+    frames[5].symlink_to(folder / "frames" / "gone.png")           # a dangling link
+    frames[7].unlink()
+    frames[7].symlink_to(frames[7])                                # a link loop
+    header = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + (100000).to_bytes(4, "big") * 2 + b"\x08\x00\x00\x00\x00"
+    frames[9].write_bytes(header + b"\x00" * 64)                   # a header declaring 1e10 pixels
+    run = _process(folder, tmp_path / "run", "detection", ("ccpi-hg-2p",), fps=2.0, initial_height_m=80.0)
+    flagged = {item["frame"]: item["reason"] for item in run["flagged"]}
+    assert set(flagged) == {3, 5, 7, 9}
+    assert "a folder" in flagged[3] and "a dangling link" in flagged[5] and "a link loop" in flagged[7]
+    assert "unreadable image" in flagged[9]
+    measurements = read_measurements(tmp_path / "run" / "measurements.csv")
+    assert measurements.n_rows == n
+    np.testing.assert_allclose(measurements["t_s"], np.arange(n) / 2.0)
+    assert cv2.imread(str(frames[10])) is not None and measurements["found"][10] in (0, 1)
