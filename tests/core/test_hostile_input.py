@@ -126,6 +126,11 @@ def test_implausible_cameras_are_refused(simulated, tmp_path, field, value, expe
         check_camera(CameraModel.load(path), "camera.json")
 
 
+def test_the_readme_holds_the_one_table_of_limits():
+    readme = (ROOT / "README.md").read_text()
+    assert markdown_table() in readme
+
+
 # ---------------------------------------------------------------- paths checked up front
 def test_output_paths_are_checked_before_any_work(tmp_path):
     regular = tmp_path / "file.txt"
