@@ -322,6 +322,8 @@ def _table_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: st
                         "step_us": 1e6 * float(np.median(timing[obs]))}
     flags = _print_table(spec, results, echo)
     extra = {}
+    if spec.thesis_table and case1 is not None:
+        extra["convergence_notes"] = _convergence_notes(spec, results, case1, runs_traj1, echo)
     if condition.calibration_error_deg:
         extra["calibration_axes"] = _calibration_axes(condition.calibration_error_deg, echo)
     plots = []
@@ -389,6 +391,83 @@ def _calibration_study(spec: StudySpec, seed: int, echo) -> dict:
              + f" | {worst[0]:8.3f} | {worst[1]:9.3f} | {worst[2]:9.3f}")
     echo("(! misses the target)")
     return {"conditions": figures, "target_m": CALIBRATION_TARGET_M, "target_deg": CALIBRATION_TARGET_DEG}
+
+
+#: Why 5 % convergence times differ from the thesis's by more than 2x, measured (README, "5 %
+#: convergence time on simulated measurements"); printed under a study's table with each run's figures.
+#: "faster" for every study; the others by thesis table, for times slower than the thesis's or none.
+CONVERGENCE_REASONS = {
+    "faster": "faster than the thesis's: tuning. The thesis tuned II, EKF and OJ by iteration and gives no "
+              "gains; ours converge while the observability index is high (the turn to the centreline): kf-2p "
+              "assuming 10 px of image noise takes 4.4 s on ideal measurements, ii-2p with half our lambda "
+              "2.6 s, ekf-2l with sigma_line 1e-2 3.0 s.",
+    "5.6": "slower: once aligned the observability index of the corners falls 50-160 fold until about 2 km "
+           "out (thesis 5.2.2.1: 20-45 s), and 1 px of noise keeps dH 5-16 % off there. The thesis's Table 5.6 "
+           "convergence row is its Table 5.3 (ideal) row digit for digit, and its CCPI error at 400 ft "
+           "(-6.17 m, 5.1 %) is outside the band: not a sustained time of its noisy run.",
+    "5.7": "slower or none: the weakly observable stretch with 5 px of noise. The thesis's own Table 5.7 "
+           "errors lie outside the band after its convergence times (EKF -7.46 m at 400 ft, CCCS 2.91 m at "
+           "100 ft).",
+    "5.10": "none: the 0.5 deg pitch error of the mounting costs ours metres to tens of metres at 100 ft "
+            "(camera misalignment: issue 12).",
+    "5.12": "the band's edge: a 5 % velocity bias makes every observer settle on dH_hat = 0.95 dH, so "
+            "converged or not is decided by residuals far below a percent.",
+}
+#: Studies whose reason holds for times faster and slower than the thesis's alike.
+CONVERGENCE_REASON_EITHER_WAY = ("5.12",)
+
+
+def _convergence_notes(spec: StudySpec, results: dict, case: Case, runs: dict, echo) -> dict:
+    """For each observer whose convergence time on thesis-1 is more than 2x off the thesis's (or none
+    where the thesis has one): if slower, its last frame outside the band before 100 ft and the
+    observability index before and after alignment; then the reasons (:data:`CONVERGENCE_REASONS`)."""
+    from visland.estimation.metrics import CONVERGENCE_TOLERANCE, CONVERGENCE_WINDOW_END_FT
+    notes = {}
+    lines = []
+    kinds = []
+    below = np.nonzero(case.dh_true_m <= CONVERGENCE_WINDOW_END_FT * FT_TO_M)[0]
+    end = int(below[0]) + 1 if below.size else len(case.dh_true_m)
+    for obs, r in results.items():
+        theirs = thesis_value(spec.thesis_table, obs, "conv_time_5pct_s_traj1")
+        ours = r["conv_time_5pct_s"]
+        if theirs is None or (math.isfinite(ours) and 0.5 * theirs <= ours <= 2.0 * theirs):
+            continue
+        if math.isfinite(ours) and ours < 0.5 * theirs:
+            kinds.append(spec.thesis_table if spec.thesis_table in CONVERGENCE_REASON_EITHER_WAY else "faster")
+            notes[obs] = {"kind": "faster"}
+            lines.append(f"  {obs}: {ours:.2f} s against the thesis's {theirs:g} s")
+            continue
+        kinds.append(spec.thesis_table)
+        run = runs[obs]
+        t_rel = run.t_s - run.start_t_s
+        rel = np.abs(case.dh_true_m - run.dh_m) / case.dh_true_m
+        outside = np.nonzero(((rel > CONVERGENCE_TOLERANCE) | ~np.isfinite(rel)) & (t_rel >= 0)
+                             & (np.arange(len(rel)) < end))[0]
+        if not outside.size:
+            continue
+        k = int(outside[-1])
+        first = (t_rel >= 0) & (t_rel < 10.0)
+        later = (t_rel >= 15.0) & (t_rel <= t_rel[k])
+        o_first = float(np.nanmedian(run.observability[first])) if np.isfinite(run.observability[first]).any() \
+            else math.nan
+        o_later = float(np.nanmedian(run.observability[later])) if np.isfinite(run.observability[later]).any() \
+            else math.nan
+        notes[obs] = {"kind": "slower" if math.isfinite(ours) else "none", "last_outside_t_s": float(t_rel[k]),
+                      "dx_m": float(case.dx_true_m[k]), "dh_m": float(case.dh_true_m[k]),
+                      "error_pct": float(100.0 * rel[k]) if np.isfinite(rel[k]) else None,
+                      "observability_first_10s": o_first, "observability_15s_to_last_outside": o_later}
+        lines.append(f"  {obs}: last outside 5 % at {t_rel[k]:.2f} s (dX {case.dx_true_m[k]:.0f} m, "
+             f"{case.dh_true_m[k]:.1f} m high, "
+             + (f"{100.0 * rel[k]:.1f} % off" if np.isfinite(rel[k]) else "no estimate")
+             + f"); observability index median {o_first:.3g} in the first 10 s, {o_later:.3g} from 15 s to then")
+    reasons = [CONVERGENCE_REASONS[k] for k in dict.fromkeys(kinds) if k in CONVERGENCE_REASONS]
+    if notes:
+        echo("5 % convergence times more than 2x off the thesis's (or none), on thesis-1:")
+        for line in lines + [f"  why: {reason}" for reason in reasons]:
+            echo(line)
+        echo("")
+    return {"observers": {o: {k: json_ready(v) for k, v in n.items()} for o, n in notes.items()},
+            "reasons": reasons}
 
 
 def _calibration_axes(error_deg: float, echo) -> dict:

@@ -126,3 +126,31 @@ def test_compare_reads_the_start_from_metrics_json_and_shows_the_thesis_time(tmp
     assert "| 5 % convergence time (s), thesis-1 | 7.750 | 7.750 |" in table
     assert "| 5 % convergence time to the end of the run (s), thesis-1 | 16.750 | - |" in table
     assert "until the true height first falls to 100 ft" in table
+
+
+def test_study_notes_name_the_last_excursion_of_cells_more_than_twice_off_the_thesis():
+    """Table 5.6's thesis times: ccpi-hg-2p 5.83 s, kf-2p 8.88 s, cccs-2p 5.64 s. A run last outside the
+    band at 8.0 s (7.0 s from its start, within 2x) is not noted; one last outside at 15.5 s is, with
+    that time, and one converging at 2 s is noted as faster."""
+    from types import SimpleNamespace
+    from visland.estimation.study import STUDIES, _convergence_notes
+    case = SimpleNamespace(dh_true_m=DH_TRUE_M, dx_true_m=-3000.0 + 70.0 * T_S)
+    late = relative_error_history()
+    late[at(15.5)] = 0.06
+    fast = np.where(T_S < START_T_S, np.nan, np.where(T_S < 3.0, 0.30, 0.01))
+    runs, results = {}, {}
+    for name, r in (("cccs-2p", relative_error_history()), ("ccpi-hg-2p", late), ("kf-2p", fast)):
+        dh = DH_TRUE_M * (1.0 + r)
+        runs[name] = SimpleNamespace(t_s=T_S, start_t_s=START_T_S, dh_m=dh, observability=np.full(T_S.size, 100.0))
+        results[name] = {"conv_time_5pct_s": convergence_time_s(T_S, DH_TRUE_M, dh, start_t_s=START_T_S)}
+    assert [results[n]["conv_time_5pct_s"] for n in runs] == [pytest.approx(7.5), pytest.approx(15.0),
+                                                              pytest.approx(2.0)]
+    lines = []
+    notes = _convergence_notes(STUDIES["table-5.6"], results, case, runs, lines.append)
+    assert set(notes["observers"]) == {"ccpi-hg-2p", "kf-2p"}
+    ccpi = notes["observers"]["ccpi-hg-2p"]
+    assert ccpi["kind"] == "slower" and ccpi["last_outside_t_s"] == pytest.approx(15.5 - START_T_S)
+    assert ccpi["error_pct"] == pytest.approx(6.0) and ccpi["dh_m"] == pytest.approx(35.0)
+    assert notes["observers"]["kf-2p"] == {"kind": "faster"}
+    assert len(notes["reasons"]) == 2 and any("Table 5.3 (ideal) row" in r for r in notes["reasons"])
+    assert any("ccpi-hg-2p: last outside 5 % at 14.50 s" in line for line in lines)
