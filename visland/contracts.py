@@ -340,7 +340,7 @@ def read_measurements(path) -> Table:
     def add(column, values):
         table[column] = values
         order.append(column)
-    for column in LABEL_COLUMNS + LABEL_EXTRA_COLUMNS:
+    for column in LABEL_COLUMNS:
         if column not in table and column not in ("frame", "t_s") and not column.endswith("_visible"):
             add(column, np.full(n, np.nan))
     for corner in CORNER_NAMES:
