@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import argparse
 
+from visland.render.params import LIGHTING, MARKINGS, SURROUNDINGS, TAXIWAYS
+
 
 def _positive_int(text):
     try:
@@ -35,7 +37,7 @@ def register(subparsers) -> None:
     scene = p.add_argument_group("scene (see visland.render.SceneParams)")
     scene.add_argument("--scene", metavar="FILE", help="scene parameters, JSON or TOML (options below override it)")
     scene.add_argument("--scene-seed", type=_positive_int, metavar="N", help="texture and noise seed (default --seed)")
-    scene.add_argument("--surface", choices=("asphalt", "concrete"))
+    scene.add_argument("--surface", choices=("asphalt", "concrete", "patched"))
     scene.add_argument("--marking-wear", type=float, metavar="0..1")
     scene.add_argument("--sun-azimuth", type=float, metavar="DEG", dest="sun_azimuth_deg")
     scene.add_argument("--sun-elevation", type=float, metavar="DEG", dest="sun_elevation_deg")
@@ -45,6 +47,25 @@ def register(subparsers) -> None:
     scene.add_argument("--blur", type=float, metavar="PX", dest="blur_sigma_px", help="Gaussian blur sigma")
     scene.add_argument("--msaa", type=int, choices=(0, 2, 4), dest="msaa_samples")
     scene.add_argument("--flat", action="store_true", help="flat colours (white runway on black) for label checks")
+    scene.add_argument("--variety", type=_positive_int, metavar="SEED",
+                       help="draw the runway size and the whole scene at random from SEED (visland.render.variety); "
+                            "the options here still override the draw")
+    scene.add_argument("--runway-length", type=float, metavar="M", help="runway length, metres (e.g. 1200-4000)")
+    scene.add_argument("--runway-width", type=float, metavar="M", help="runway width, metres (e.g. 23-60)")
+    scene.add_argument("--markings", choices=MARKINGS, help="marking set")
+    scene.add_argument("--threshold-stripes", type=int, metavar="N", help="threshold stripes, even 4-16 (0: by width)")
+    scene.add_argument("--no-side-stripes", action="store_false", dest="side_stripes", default=None,
+                       help="no runway side stripes")
+    scene.add_argument("--pre-threshold", type=float, metavar="M", dest="pre_threshold_m",
+                       help="length of the displaced-threshold pavement or blast pad, metres")
+    scene.add_argument("--surroundings", choices=SURROUNDINGS)
+    scene.add_argument("--taxiways", choices=TAXIWAYS)
+    scene.add_argument("--second-runway", action="store_true", default=None, help="a second, parallel runway")
+    scene.add_argument("--lighting", choices=LIGHTING)
+    scene.add_argument("--monochrome", action="store_true", default=None, help="grey-level sensor")
+    scene.add_argument("--vignetting", type=float, metavar="0..0.6", help="corner light fall-off")
+    scene.add_argument("--jpeg", type=int, metavar="QUALITY", dest="jpeg_quality",
+                       help="JPEG compression quality 5-100 applied to every frame (0: none)")
     p.set_defaults(func=cmd_generate)
 
 
@@ -55,12 +76,33 @@ def scene_from_args(args):
     if args.flat:
         base.update(SceneParams.flat().to_dict())
     base["seed"] = args.scene_seed if args.scene_seed is not None else (args.seed if not args.scene else base["seed"])
+    if getattr(args, "variety", None) is not None:
+        from visland.render.variety import draw_variety
+        base = draw_variety(args.variety, SceneParams.from_dict(base, source="scene options")).scene.to_dict()
+        if args.scene_seed is not None:
+            base["seed"] = args.scene_seed
     for name in ("surface", "marking_wear", "sun_azimuth_deg", "sun_elevation_deg", "visibility_m", "cloud_cover",
-                 "noise_std", "blur_sigma_px", "msaa_samples"):
+                 "noise_std", "blur_sigma_px", "msaa_samples", "markings", "threshold_stripes", "side_stripes",
+                 "pre_threshold_m", "surroundings", "taxiways", "second_runway", "lighting", "monochrome",
+                 "vignetting", "jpeg_quality"):
         value = getattr(args, name, None)
         if value is not None:
             base[name] = value
     return SceneParams.from_dict(base, source="scene options")
+
+
+def runway_size_from_args(args, runway):
+    """Runway length and width: ``--runway-length/--runway-width``, else the ``--variety`` draw, else ``runway``'s."""
+    length, width = runway.length_m, runway.width_m
+    if getattr(args, "variety", None) is not None:
+        from visland.render.variety import draw_variety
+        drawn = draw_variety(args.variety)
+        length, width = drawn.runway_length_m, drawn.runway_width_m
+    if getattr(args, "runway_length", None) is not None:
+        length = args.runway_length
+    if getattr(args, "runway_width", None) is not None:
+        width = args.runway_width
+    return float(length), float(width)
 
 
 def cmd_generate(args) -> int:
@@ -83,6 +125,11 @@ def cmd_generate(args) -> int:
         scenario = with_runway(scenario, Runway.named(args.runway, heading_deg=scenario.runway.heading_deg,
                                                       aim_distance_m=scenario.runway.aim_distance_m,
                                                       slope_pct=scenario.runway.slope_pct))
+    length, width = runway_size_from_args(args, scenario.runway)
+    if (length, width) != (scenario.runway.length_m, scenario.runway.width_m):
+        scenario = with_runway(scenario, Runway(length_m=length, width_m=width, heading_deg=scenario.runway.heading_deg,
+                                                aim_distance_m=scenario.runway.aim_distance_m,
+                                                slope_pct=scenario.runway.slope_pct))
     options = simulation_options_from_args(args, camera=CameraModel.default(args.size))
     job = GenerateJob(scenario, options, scene_from_args(args), png_compression=args.png_compression, lard=args.lard)
     report = generate_dataset(job, args.out, workers=args.workers, scheduler=args.scheduler, force=args.force,

@@ -19,6 +19,14 @@ width and length):
 - touchdown zone, pattern A: pairs every 150 m of 3, 3, 2, 2, 1, 1 stripes (22.5 m x 1.8 m,
   1.5 m apart), fewer pairs on shorter runways, none within 50 m of the aiming point;
 - side stripes: 0.9 m along both edges (0.45 m under 30 m width).
+
+Other marking sets (``style``, :data:`visland.render.params.MARKINGS`): ``faa`` (threshold
+stripes 45.7 m long, 1.75 m wide and 1.75 m apart from the centre outwards, so they do not
+reach the edges; aiming point 311 m, 45.7 m long), ``none`` (bare pavement), ``displaced``
+(ICAO plus a 1.8 m transverse bar at the threshold and white arrows on the pavement before it),
+``blast_pad`` (ICAO plus yellow chevrons on the pad before it); ``worn`` is ICAO (the tile
+painter wears it). ``threshold_stripes`` overrides the count by width; ``side_stripes`` off
+drops them. Arrows and chevrons are polygons (``polygons``), painted at x < 0 only.
 """
 from __future__ import annotations
 
@@ -66,6 +74,11 @@ class MarkingLayout:
     designators: tuple  # (near, far) as painted, e.g. ("04", "22")
     aiming_point_start_m: float
     touchdown_zone_end_m: float
+    #: Painted polygons ``(colour, (n, 2) array of x, y)``: displaced-threshold arrows (white),
+    #: blast pad chevrons (yellow); all at x < 0, before the threshold.
+    polygons: tuple = ()
+    #: Length of the pavement before the threshold (displaced threshold or blast pad), metres; 0: none.
+    pre_threshold_m: float = 0.0
 
     def of_kind(self, kind: str) -> np.ndarray:
         mask = np.array([k == kind for k in self.kinds])
@@ -102,17 +115,21 @@ def _tdz_pairs(length_m: float) -> int:
     return 6
 
 
-def _one_end(runway: Runway, number: int) -> list:
+def _one_end(runway: Runway, number: int, style: str = "icao", n_stripes: int = 0) -> list:
     """Rectangles of one runway end in that end's own frame (x from its threshold, y to its right)."""
     W = runway.width_m
     L = runway.length_m
     out = []
     # threshold stripes
-    n = _threshold_stripe_count(W)
-    span = min(W - 6.0, 54.0)
-    unit = span / (2 * n)            # n stripes and n space units (the central space is double)
+    n = n_stripes or _threshold_stripe_count(W)
     x0 = THRESHOLD_SETBACK_M
-    x1 = x0 + THRESHOLD_STRIPE_LENGTH_M
+    if style == "faa":
+        unit = min(1.75, (W - 6.0) / (2 * n))   # FAA: 5.75 ft stripes and spaces, double space at the centre
+        x1 = x0 + 45.7
+    else:
+        span = min(W - 6.0, 54.0)
+        unit = span / (2 * n)        # n stripes and n space units (the central space is double)
+        x1 = x0 + THRESHOLD_STRIPE_LENGTH_M
     for k in range(n // 2):
         y_in = unit * (1 + 2 * k)    # inner edge of the k-th stripe from the centre
         out.append(("threshold", x0, x1, y_in, y_in + unit))
@@ -134,8 +151,8 @@ def _one_end(runway: Runway, number: int) -> list:
                                 y_left + (col + 1) * cell_w))
     designator_end = x_base + DIGIT_HEIGHT_M
     # aiming point
-    aim0 = _aiming_point_start(L)
-    aim_len = 60.0 if L >= 2400.0 else 45.0
+    aim0 = _aiming_point_start(L) if style != "faa" else 311.0
+    aim_len = (60.0 if L >= 2400.0 else 45.0) if style != "faa" else 45.7
     aim_w = min(10.0, 0.2 * W)
     aim_in = 0.2 * W
     out.append(("aiming_point", aim0, aim0 + aim_len, aim_in, aim_in + aim_w))
@@ -157,13 +174,58 @@ def _one_end(runway: Runway, number: int) -> list:
     return out, designator_end, aim0, tdz_end
 
 
-def runway_markings(runway: Runway) -> MarkingLayout:
-    """All white markings of ``runway`` (both ends, centre line, side stripes) in the runway frame R."""
+def _arrow(x_tip: float, y: float, length: float, shaft_w: float, head_w: float, head_len: float) -> np.ndarray:
+    """An arrow pointing +x with its tip at ``(x_tip, y)`` as one polygon (x, y)."""
+    xs = x_tip - head_len
+    xt = x_tip - length
+    return np.array([(x_tip, y), (xs, y + head_w / 2), (xs, y + shaft_w / 2), (xt, y + shaft_w / 2),
+                     (xt, y - shaft_w / 2), (xs, y - shaft_w / 2), (xs, y - head_w / 2)])
+
+
+def _pre_threshold_polygons(style: str, W: float, length: float) -> list:
+    """Arrows (displaced threshold) or chevrons (blast pad) on ``[-length, 0] x [-W/2, W/2]``."""
+    polys = []
+    if style == "displaced":
+        # arrows along the centre line every 30 m, and a row of arrow heads across the width 6 m
+        # before the threshold bar (Annex 14 figure 5-4, option B)
+        x_tip = -10.0
+        while x_tip - 20.0 > -length + 5.0:
+            polys.append(("paint_white", _arrow(x_tip, 0.0, 20.0, 0.9, 3.0, 6.0)))
+            x_tip -= 30.0
+        n_heads = max(2, int((W - 6.0) // 9.0))
+        for y in np.linspace(-(W / 2 - 4.5), W / 2 - 4.5, n_heads):
+            if abs(y) > 3.0:
+                polys.append(("paint_white", np.array([(-6.0, y), (-10.5, y + 1.5), (-10.5, y - 1.5)])))
+    elif style == "blast_pad":
+        # yellow chevrons 0.9 m wide every 30 m, apex on the centre line pointing at the threshold
+        half = W / 2.0
+        x_apex = -10.0
+        while x_apex - half - 1.27 > -length:
+            for side in (1.0, -1.0):
+                polys.append(("paint_yellow", np.array([
+                    (x_apex, 0.0), (x_apex - half, side * half), (x_apex - half - 1.27, side * half),
+                    (x_apex - 1.27, 0.0)])))
+            x_apex -= 30.0
+    return polys
+
+
+def runway_markings(runway: Runway, style: str = "icao", threshold_stripes: int = 0, side_stripes: bool = True,
+                    pre_threshold_m: float = 150.0) -> MarkingLayout:
+    """All markings of ``runway`` (both ends, centre line, side stripes) in the runway frame R.
+
+    ``style`` is a marking set (module docstring); ``threshold_stripes`` 0 takes Annex 14's count
+    for the width; ``pre_threshold_m`` is the length of the displaced-threshold pavement or of
+    the blast pad (styles ``displaced`` and ``blast_pad`` only).
+    """
     L, W = runway.length_m, runway.width_m
     near_number = designator_number(runway.heading_deg)
     far_number = designator_number((runway.heading_deg + 180.0) % 360.0)
-    near, designator_end, aim0, tdz_end = _one_end(runway, near_number)
-    far, _, _, _ = _one_end(runway, far_number)
+    if style == "none":
+        return MarkingLayout(np.zeros((0, 4)), (), (f"{near_number:02d}", f"{far_number:02d}"),
+                             _aiming_point_start(L), 0.0)
+    paint_style = "faa" if style == "faa" else "icao"
+    near, designator_end, aim0, tdz_end = _one_end(runway, near_number, paint_style, threshold_stripes)
+    far, _, _, _ = _one_end(runway, far_number, paint_style, threshold_stripes)
     rects = [(k, x0, x1, y0, y1) for k, x0, x1, y0, y1 in near]
     # the far end's frame is R turned by 180 deg about z: x' = L - x, y' = -y
     rects += [(k, L - x1, L - x0, -y1, -y0) for k, x0, x1, y0, y1 in far]
@@ -178,9 +240,17 @@ def runway_markings(runway: Runway) -> MarkingLayout:
         for k in range(n_stripes):
             x0 = start + k * period
             rects.append(("centre_line", x0, x0 + CENTRELINE_STRIPE_M, -half_w, half_w))
-    side_w = 0.9 if W >= 30.0 else 0.45
-    rects.append(("side_stripe", 0.0, L, -W / 2.0, -W / 2.0 + side_w))
-    rects.append(("side_stripe", 0.0, L, W / 2.0 - side_w, W / 2.0))
+    if side_stripes:
+        side_w = 0.9 if W >= 30.0 else 0.45
+        rects.append(("side_stripe", 0.0, L, -W / 2.0, -W / 2.0 + side_w))
+        rects.append(("side_stripe", 0.0, L, W / 2.0 - side_w, W / 2.0))
+    polygons = ()
+    pre = 0.0
+    if style in ("displaced", "blast_pad"):
+        pre = float(pre_threshold_m)
+        polygons = tuple(_pre_threshold_polygons(style, W, pre))
+        if style == "displaced":
+            rects.append(("threshold_bar", 0.0, 1.8, -W / 2.0, W / 2.0))
     kinds = tuple(r[0] for r in rects)
     array = np.array([r[1:] for r in rects], dtype=float)
-    return MarkingLayout(array, kinds, (f"{near_number:02d}", f"{far_number:02d}"), aim0, tdz_end)
+    return MarkingLayout(array, kinds, (f"{near_number:02d}", f"{far_number:02d}"), aim0, tdz_end, polygons, pre)

@@ -13,9 +13,23 @@ from typing import ClassVar
 
 from visland.params import ParamsFile
 
-__all__ = ["SceneParams", "SURFACES", "STYLES"]
+__all__ = ["SceneParams", "SURFACES", "STYLES", "MARKINGS", "SURROUNDINGS", "LIGHTING", "TAXIWAYS"]
 
-SURFACES = ("asphalt", "concrete")
+SURFACES = ("asphalt", "concrete", "patched")
+#: Marking sets (see :mod:`visland.render.markings`): ``icao`` (Annex 14), ``faa`` (FAA AC
+#: 150/5340-1 proportions: longer, narrower threshold stripes), ``worn`` (ICAO, paint mostly
+#: gone), ``none`` (bare pavement), ``displaced`` (ICAO with a displaced threshold: pavement
+#: with white arrows before a transverse bar at the threshold), ``blast_pad`` (ICAO with a
+#: paved blast pad carrying yellow chevrons before the threshold).
+MARKINGS = ("icao", "faa", "worn", "none", "displaced", "blast_pad")
+#: What lies around the airport: fields and grass of these colours, or a town.
+SURROUNDINGS = ("green", "dry", "sand", "snow", "urban")
+#: ``day``: sun and sky as given; ``overcast``: diffuse light, grey sky; ``dusk``: dim, warm.
+LIGHTING = ("day", "overcast", "dusk")
+#: Taxiway layouts: ``standard`` (parallel taxiway on the right, connectors far from the
+#: threshold), ``near_threshold`` (also connectors within 300 m of the threshold on both sides
+#: and a parallel taxiway on the left), ``none`` (no taxiways, apron or buildings).
+TAXIWAYS = ("standard", "near_threshold", "none")
 #: ``realistic``: textured scene; ``flat``: flat colours for label checks (white runway,
 #: black ground and sky, no markings, no haze, no noise).
 STYLES = ("realistic", "flat")
@@ -61,6 +75,31 @@ class SceneParams(ParamsFile):
         Runway marking texture resolution, metres per texel, in [0.03, 0.5].
     distractors : bool
         Draw taxiways, apron, buildings and roads.
+    markings : str
+        Marking set, one of :data:`MARKINGS`.
+    threshold_stripes : int
+        Number of threshold stripes, an even number from 4 to 16, or 0 for Annex 14's count
+        for the runway's width.
+    side_stripes : bool
+        Paint the runway side stripes.
+    pre_threshold_m : float
+        Length of the displaced-threshold pavement or the blast pad before the threshold
+        (markings ``displaced`` / ``blast_pad``), metres, in [30, 600].
+    surroundings : str
+        One of :data:`SURROUNDINGS`.
+    taxiways : str
+        Taxiway layout, one of :data:`TAXIWAYS` (with ``distractors``).
+    second_runway : bool
+        A second, parallel runway 400 m to the left, staggered (with ``distractors``).
+    lighting : str
+        One of :data:`LIGHTING`.
+    monochrome : bool
+        Grey-level sensor (the three channels of the frame are equal).
+    vignetting : float
+        Light fall-off at the image corners, 0 (none) to 0.6 (corners 60 % darker).
+    jpeg_quality : int
+        0 (no compression) or a JPEG quality from 5 to 100: each frame goes through JPEG
+        encoding and decoding (blocking and ringing) before it is stored.
     """
 
     params_kind: ClassVar[str] = "scene"
@@ -82,6 +121,17 @@ class SceneParams(ParamsFile):
     anisotropy: float = 8.0
     texel_m: float = 0.08
     distractors: bool = True
+    markings: str = "icao"
+    threshold_stripes: int = 0
+    side_stripes: bool = True
+    pre_threshold_m: float = 150.0
+    surroundings: str = "green"
+    taxiways: str = "standard"
+    second_runway: bool = False
+    lighting: str = "day"
+    monochrome: bool = False
+    vignetting: float = 0.0
+    jpeg_quality: int = 0
 
     def __post_init__(self):
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
@@ -96,6 +146,7 @@ class SceneParams(ParamsFile):
             ("visibility_m", 300.0, 80000.0), ("cloud_cover", 0.0, 1.0),
             ("noise_std", 0.0, 30.0), ("blur_sigma_px", 0.0, 5.0),
             ("anisotropy", 1.0, 16.0), ("texel_m", 0.03, 0.5),
+            ("pre_threshold_m", 30.0, 600.0), ("vignetting", 0.0, 0.6),
         )
         for name, low, high in ranges:
             value = getattr(self, name)
@@ -106,8 +157,20 @@ class SceneParams(ParamsFile):
             object.__setattr__(self, name, float(value))
         if self.msaa_samples not in (0, 2, 4) or isinstance(self.msaa_samples, bool):
             raise ValueError(f"scene msaa_samples must be 0, 2 or 4, got {self.msaa_samples!r}")
-        if not isinstance(self.distractors, bool):
-            raise ValueError(f"scene distractors must be true or false, got {self.distractors!r}")
+        for name in ("distractors", "side_stripes", "second_runway", "monochrome"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"scene {name} must be true or false, got {getattr(self, name)!r}")
+        for name, choices in (("markings", MARKINGS), ("surroundings", SURROUNDINGS), ("lighting", LIGHTING),
+                              ("taxiways", TAXIWAYS)):
+            if getattr(self, name) not in choices:
+                raise ValueError(f"scene {name} must be one of {', '.join(choices)}, got {getattr(self, name)!r}")
+        n = self.threshold_stripes
+        if isinstance(n, bool) or not isinstance(n, int) or not (n == 0 or (4 <= n <= 16 and n % 2 == 0)):
+            raise ValueError(f"scene threshold_stripes must be 0 (by the runway's width) or an even number from "
+                             f"4 to 16, got {n!r}")
+        q = self.jpeg_quality
+        if isinstance(q, bool) or not isinstance(q, int) or not (q == 0 or 5 <= q <= 100):
+            raise ValueError(f"scene jpeg_quality must be 0 (none) or an integer from 5 to 100, got {q!r}")
 
     # ----------------------------------------------------------------- presets
     @classmethod

@@ -18,7 +18,8 @@ from visland.runway import Runway
 from .glview import OffscreenView
 from .params import SceneParams
 from .scene import SKY_RADIUS_M, build_scene
-from .sensor import NoiseBank, apply_blur
+from .sensor import (NoiseBank, apply_blur, apply_distortion, apply_gain, distortion_maps, jpeg_round_trip,
+                     to_monochrome, vignetting_gain)
 from .shaders import write_shaders
 
 __all__ = ["FrameRenderer", "clip_planes"]
@@ -47,7 +48,9 @@ class FrameRenderer:
         Look of the scene and sensor degradations.
     camera : CameraModel
         Image size and intrinsics (pixels are exact: :func:`visland.render.glview.gl_projection_matrix`).
-        Its mounting is not used: :meth:`render` takes the camera attitude directly.
+        Its mounting is not used: :meth:`render` takes the camera attitude directly. With lens
+        distortion, the pinhole image of the same intrinsics is drawn and resampled through the
+        lens (:func:`visland.render.sensor.distortion_maps`), so pinhole labels stay exact.
     runway : Runway
         Runway size (and heading, which orients the sun and the designators).
 
@@ -71,13 +74,17 @@ class FrameRenderer:
         self._view = None
         try:
             write_shaders(self._shader_dir, params, runway.heading_deg)
-            self._view = OffscreenView(camera, self._shader_dir, samples=params.msaa_samples, anisotropy=1.0)
+            self._view = OffscreenView(camera.without_distortion(), self._shader_dir, samples=params.msaa_samples,
+                                       anisotropy=1.0)
             self._handles = build_scene(runway, params)
         except BaseException:
             self.close()
             raise
         self._noise = (NoiseBank(camera.height, camera.width, params.noise_std, params.seed)
                        if params.noise_std > 0 else None)
+        self._lens_maps = distortion_maps(camera) if camera.has_distortion else None
+        self._vignetting = (vignetting_gain(camera.height, camera.width, params.vignetting)
+                            if params.vignetting > 0 else None)
 
     def render(self, p_runway_m, R_camera_from_runway, frame_seed: int | None = None) -> np.ndarray:
         """One frame seen from camera centre ``p_runway_m`` with attitude ``R_camera_from_runway``.
@@ -111,13 +118,25 @@ class FrameRenderer:
         sky_pose[:3, 3] = p
         scene.set_pose(self._handles.sky_node, sky_pose)
         rgb = self._view.render(scene, p, R_camera_from_runway, znear, zfar)
+        if self._lens_maps is not None:
+            rgb = apply_distortion(rgb, self._lens_maps)
+        if self._vignetting is not None:
+            rgb = apply_gain(rgb, self._vignetting)
         if self.params.blur_sigma_px > 0:
             rgb = apply_blur(rgb, self.params.blur_sigma_px)
+        if self.params.monochrome:
+            rgb = to_monochrome(rgb)
         if self._noise is not None:
             if frame_seed is None:
                 digest = hashlib.sha256(np.concatenate([p, np.asarray(R_camera_from_runway, float).ravel()]).tobytes())
                 frame_seed = int.from_bytes(digest.digest()[:8], "little")
             rgb = self._noise.apply(rgb, frame_seed)
+            if self.params.monochrome:
+                rgb = np.repeat(rgb[..., 1:2], 3, axis=-1)
+        if self.params.jpeg_quality:
+            rgb = jpeg_round_trip(rgb, self.params.jpeg_quality)
+            if self.params.monochrome:
+                rgb = np.repeat(rgb[..., 1:2], 3, axis=-1)
         return rgb
 
     def close(self) -> None:

@@ -62,14 +62,49 @@ class AirportLayout:
     runway_tile_edges_m: np.ndarray
 
 
-def airport_layout(runway: Runway, distractors: bool = True) -> AirportLayout:
-    """Where everything is, in the runway frame (see module docstring)."""
+def airport_layout(runway: Runway, distractors: bool = True, taxiways: str = "standard", second_runway: bool = False,
+                   pre_threshold_m: float = 0.0) -> AirportLayout:
+    """Where everything is, in the runway frame (see module docstring).
+
+    ``taxiways`` (``SceneParams.taxiways``): ``near_threshold`` adds a parallel taxiway on the
+    left and connectors at 90 m (right) and 230 m (left) past the threshold; ``none`` draws no
+    taxiway, apron or building (roads stay). ``second_runway`` adds a parallel runway 400 m to
+    the left, its threshold 600 m before ours. ``pre_threshold_m`` > 0 paves ``[-pre, 0]`` at
+    the runway's width (displaced threshold or blast pad).
+    """
     L, W = runway.length_m, runway.width_m
     n_tiles = max(1, int(math.ceil(L / RUNWAY_TILE_M)))
     tile_edges = np.linspace(0.0, L, n_tiles + 1)
     regions = [Region("runway", (0.0, L, -W / 2, W / 2), "runway", 100)]
+    if pre_threshold_m > 0:
+        regions.append(Region("pre_threshold", (-pre_threshold_m, 0.0, -W / 2, W / 2), "pre_threshold", 90))
     buildings = []
+    grass_x0 = -450.0 - pre_threshold_m
+    grass_y0 = -330.0
+    if distractors and second_runway:
+        w2 = max(30.0, 0.8 * W)
+        y2 = -(W / 2 + 400.0)
+        regions.append(Region("second_runway", (-600.0, max(L - 900.0, 600.0), y2 - w2 / 2, y2 + w2 / 2), "runway2",
+                              60, "x", w2))
+        grass_y0 = y2 - w2 / 2 - 120.0
+        grass_x0 = min(grass_x0, -750.0)
+    if distractors and taxiways == "none":
+        road_w = 8.0
+        regions.append(Region("road_parallel", (-GROUND_EXTENT_M, GROUND_EXTENT_M, -650.0 - road_w / 2 + min(0.0, grass_y0 + 330.0),
+                                                -650.0 + road_w / 2 + min(0.0, grass_y0 + 330.0)), "road", 20, "x", road_w))
+        return AirportLayout(tuple(regions), (), (grass_x0, L + 450.0, grass_y0, 330.0), tile_edges)
     if distractors:
+        if taxiways == "near_threshold":
+            sep = 4.0 * W + 2.5
+            tw = min(23.0, 0.5 * W + 0.5)
+            regions.append(Region("left_parallel_taxiway", (60.0, L - 40.0, -sep - tw / 2, -sep + tw / 2), "taxiway",
+                                  50, "x", tw))
+            regions.append(Region("connector_near_right", (90.0 - tw / 2, 90.0 + tw / 2, W / 2, sep - tw / 2),
+                                  "taxiway", 40, "y", tw))
+            regions.append(Region("connector_near_left", (230.0 - tw / 2, 230.0 + tw / 2, -sep + tw / 2, -W / 2),
+                                  "taxiway", 40, "y", tw))
+            regions.append(Region("connector_far_left", (L - 60.0 - tw / 2, L - 60.0 + tw / 2, -sep + tw / 2, -W / 2),
+                                  "taxiway", 40, "y", tw))
         sep = 4.0 * W + 2.5
         tw = min(23.0, 0.5 * W + 0.5)
         t_in, t_out = sep - tw / 2, sep + tw / 2
@@ -81,8 +116,9 @@ def airport_layout(runway: Runway, distractors: bool = True) -> AirportLayout:
         regions.append(Region("apron_link", (0.48 * L - tw / 2, 0.48 * L + tw / 2, t_out, a_y0), "taxiway", 40, "y", tw))
         regions.append(Region("apron", (a_x0, a_x1, a_y0, a_y1), "apron", 30))
         road_w = 8.0
-        regions.append(Region("road_parallel", (-GROUND_EXTENT_M, GROUND_EXTENT_M, -650.0 - road_w / 2,
-                                                -650.0 + road_w / 2), "road", 20, "x", road_w))
+        y_road = -650.0 + min(0.0, grass_y0 + 330.0)
+        regions.append(Region("road_parallel", (-GROUND_EXTENT_M, GROUND_EXTENT_M, y_road - road_w / 2,
+                                                y_road + road_w / 2), "road", 20, "x", road_w))
         regions.append(Region("road_crossing", (-1400.0 - road_w / 2, -1400.0 + road_w / 2, -GROUND_EXTENT_M,
                                                 GROUND_EXTENT_M), "road", 10, "y", road_w))
         # terminal, hangars, tower, cargo sheds beyond the apron; farms along the road
@@ -99,9 +135,9 @@ def airport_layout(runway: Runway, distractors: bool = True) -> AirportLayout:
                                (L + 1500.0, -720.0)):
             buildings.append((x_farm, x_farm + 30.0, y_farm - 14.0, y_farm, 8.0, (0.64, 0.44, 0.36)))
             buildings.append((x_farm + 40.0, x_farm + 75.0, y_farm - 20.0, y_farm - 2.0, 7.0, (0.72, 0.72, 0.70)))
-        grass_rect = (-450.0, L + 450.0, -330.0, a_y1 + 140.0)
+        grass_rect = (grass_x0, L + 450.0, grass_y0, a_y1 + 140.0)
     else:
-        grass_rect = (-450.0, L + 450.0, -330.0, 330.0)
+        grass_rect = (grass_x0, L + 450.0, grass_y0, 330.0)
     return AirportLayout(tuple(regions), tuple(buildings), grass_rect, tile_edges)
 
 
@@ -192,8 +228,12 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     import trimesh
 
     flat = params.style == "flat"
-    layout = airport_layout(runway, distractors=params.distractors and not flat)
-    marking_layout = runway_markings(runway)
+    marking_layout = runway_markings(runway, params.markings, params.threshold_stripes, params.side_stripes,
+                                     params.pre_threshold_m)
+    pre = 0.0 if flat else marking_layout.pre_threshold_m
+    layout = airport_layout(runway, distractors=params.distractors and not flat, taxiways=params.taxiways,
+                            second_runway=params.second_runway, pre_threshold_m=pre)
+    wear = max(params.marking_wear, 0.85) if params.markings == "worn" else params.marking_wear
     scene = pyrender.Scene(bg_color=(0.0, 0.0, 0.0, 1.0), ambient_light=(0.0, 0.0, 0.0))
 
     xs, ys = _grid_edges(layout)
@@ -211,7 +251,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
         extent = 12800.0
         centre = (runway.length_m / 2.0, 0.0)
         fields = textures.fields_texture(np.random.default_rng([params.seed, 1]), 1024, extent, centre,
-                                         layout.grass_rect)
+                                         layout.grass_rect, surroundings=params.surroundings)
         grass = textures.grass_detail(np.random.default_rng([params.seed, 2]), 1024)
 
         def ground_uv(x, y):
@@ -234,14 +274,16 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     centres_x = 0.5 * (runway_cells[:, 0] + runway_cells[:, 1])
     tile_of_cell = np.clip(np.searchsorted(edges, centres_x) - 1, 0, len(edges) - 2)
     W = runway.width_m
+    patches = (textures.runway_patches(runway, np.random.default_rng([params.seed, 9]))
+               if params.surface == "patched" and not flat else None)
     for tile in range(len(edges) - 1):
         cells = runway_cells[tile_of_cell == tile]
         if not len(cells):
             continue
         x0, x1 = edges[tile], edges[tile + 1]
-        image = textures.runway_tile(x0, x1, runway, marking_layout, fields_rw, params.surface, params.marking_wear,
+        image = textures.runway_tile(x0, x1, runway, marking_layout, fields_rw, params.surface, wear,
                                      params.rubber_deposits, params.texel_m,
-                                     np.random.default_rng([params.seed, 5, tile]), flat=flat)
+                                     np.random.default_rng([params.seed, 5, tile]), flat=flat, patches=patches)
 
         def tile_uv(x, y, x0=x0, x1=x1):
             return (x - x0) / (x1 - x0), (y + W / 2) / W
@@ -253,9 +295,24 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
             material = _material(_texture(image, _CLAMP), detail_pavement, 1.0 / 8.0, 0.8, kind=4)
             _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(cells, tile_uv), material=material))
 
+    # ------------------------------------------------------------ pavement before the threshold
+    pre_idx = [k for k, r in enumerate(layout.regions) if r.material == "pre_threshold"]
+    if pre_idx:
+        cells = all_cells[owners == pre_idx[0]]
+        x0, x1 = -pre, 0.0
+        tone = 1.0 if params.markings == "displaced" else 1.25
+        image = textures.pre_threshold_tile(x0, x1, runway, marking_layout, params.surface, tone, params.texel_m,
+                                            np.random.default_rng([params.seed, 10]))
+
+        def pre_uv(x, y, x0=x0, x1=x1):
+            return (x - x0) / (x1 - x0), (y + W / 2) / W
+
+        material = _material(_texture(image, _CLAMP), detail_pavement, 1.0 / 8.0, 0.8, kind=4)
+        _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(cells, pre_uv), material=material))
+
     # ------------------------------------------------------------ strips and apron
     strip_textures = {}
-    for material_name in ("taxiway", "road", "apron"):
+    for material_name in ("taxiway", "road", "apron", "runway2"):
         idx = [k for k, r in enumerate(layout.regions) if r.material == material_name]
         if not idx:
             continue
@@ -269,11 +326,12 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
                                  colour=tuple(colour))
             _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(cells, None), material=material))
             continue
-        period = 12.0
+        period = 50.0 if material_name == "runway2" else 12.0
         width = cell_regions[0].width_m
         if material_name not in strip_textures:
             strip_textures[material_name] = textures.strip_texture(
-                material_name, width, np.random.default_rng([params.seed, 7, len(strip_textures)]), 0.08, period)
+                "runway" if material_name == "runway2" else material_name, width,
+                np.random.default_rng([params.seed, 7, len(strip_textures)]), 0.08, period)
         # per-cell UVs: along the strip axis s = position / period, across t from one edge to the other
         meshes = []
         for cell, region in zip(cells, cell_regions):

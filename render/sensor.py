@@ -1,4 +1,8 @@
-"""Sensor degradations applied to a rendered frame: optical blur, then additive noise.
+"""Sensor degradations applied to a rendered frame.
+
+Order (``FrameRenderer.render``): the pinhole render, resampled through the lens distortion
+(:func:`distortion_maps`), vignetting, optical blur, monochrome conversion, additive noise,
+JPEG compression.
 
 Noise is Gaussian with a chosen standard deviation in digital numbers. Drawing 12 million
 normal samples per 2048x2048 frame costs 50-130 ms here, so :class:`NoiseBank` draws one
@@ -11,7 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["NoiseBank", "apply_blur"]
+__all__ = ["NoiseBank", "apply_blur", "distortion_maps", "apply_distortion", "vignetting_gain", "apply_gain",
+           "to_monochrome", "jpeg_round_trip"]
 
 _MARGIN = 97  # offsets per axis (prime, so horizontal and vertical shifts do not line up)
 
@@ -23,6 +28,56 @@ def apply_blur(rgb: np.ndarray, sigma_px: float) -> np.ndarray:
         return rgb
     return cv2.GaussianBlur(rgb, (0, 0), sigmaX=float(sigma_px), sigmaY=float(sigma_px),
                             borderType=cv2.BORDER_REFLECT_101)
+
+
+def distortion_maps(camera) -> tuple[np.ndarray, np.ndarray]:
+    """``cv2.remap`` maps (float32, (H, W)) from the pinhole render to the distorted frame of ``camera``.
+
+    ``frame[v_d, u_d] = pinhole[map_v, map_u]`` with ``(map_u, map_v) =
+    camera.undistort_pixels((u_d, v_d))``: each frame pixel takes the pinhole pixel its ray
+    goes through (the inverse of :meth:`visland.camera.CameraModel.undistortion_maps`), so a
+    pinhole label ``(u, v)`` sits at ``camera.distort_pixels((u, v))`` in the frame. Rays that
+    the pinhole image does not hold (or Newton does not invert) read black.
+    """
+    v, u = np.mgrid[0:camera.height, 0:camera.width].astype(float)
+    uv = camera.undistort_pixels(np.stack([u, v], axis=-1))
+    uv = np.where(np.isfinite(uv), uv, -1e6)
+    return uv[..., 0].astype(np.float32), uv[..., 1].astype(np.float32)
+
+
+def apply_distortion(rgb: np.ndarray, maps) -> np.ndarray:
+    """The distorted frame from the pinhole render ``rgb`` with :func:`distortion_maps` ``maps``."""
+    import cv2
+    return cv2.remap(rgb, maps[0], maps[1], interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                     borderValue=(0, 0, 0))
+
+
+def vignetting_gain(height: int, width: int, strength: float) -> np.ndarray:
+    """Gain (H, W) float32: 1 at the centre, ``1 - strength`` at the corners (cos^4-like, radial)."""
+    v, u = np.mgrid[0:height, 0:width].astype(np.float32)
+    r2 = ((u - (width - 1) / 2) ** 2 + (v - (height - 1) / 2) ** 2) / (((width - 1) / 2) ** 2 + ((height - 1) / 2) ** 2)
+    return (1.0 - np.float32(strength) * r2 ** 2).astype(np.float32)
+
+
+def apply_gain(rgb: np.ndarray, gain: np.ndarray) -> np.ndarray:
+    """``rgb`` (H, W, 3) uint8 times ``gain`` (H, W), rounded and saturated."""
+    return np.clip(np.rint(rgb.astype(np.float32) * gain[..., None]), 0, 255).astype(np.uint8)
+
+
+def to_monochrome(rgb: np.ndarray) -> np.ndarray:
+    """Grey levels (Rec. 601 luma) replicated to three equal channels, (H, W, 3) uint8."""
+    import cv2
+    grey = cv2.cvtColor(np.ascontiguousarray(rgb), cv2.COLOR_RGB2GRAY)
+    return np.repeat(grey[..., None], 3, axis=-1)
+
+
+def jpeg_round_trip(rgb: np.ndarray, quality: int) -> np.ndarray:
+    """``rgb`` encoded as JPEG at ``quality`` (5-100) and decoded again (blocking, ringing)."""
+    import cv2
+    ok, data = cv2.imencode(".jpg", np.ascontiguousarray(rgb[..., ::-1]), [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+    if not ok:
+        raise RuntimeError("JPEG encoding failed")
+    return np.ascontiguousarray(cv2.imdecode(data, cv2.IMREAD_COLOR)[..., ::-1])
 
 
 class NoiseBank:

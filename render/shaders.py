@@ -229,8 +229,13 @@ def sky_colours(params: SceneParams) -> tuple[np.ndarray, np.ndarray]:
     murk = float(np.clip(1.0 - math.log(params.visibility_m / 300.0) / math.log(30000.0 / 300.0), 0.0, 1.0))
     horizon = horizon_clear * (1 - murk) + grey * murk
     zenith = zenith * (1 - 0.7 * murk) + grey * 0.7 * murk
-    cover = params.cloud_cover
+    cover = 1.0 if params.lighting == "overcast" else params.cloud_cover
     zenith = zenith * (1 - 0.5 * cover) + grey * 0.5 * cover
+    if params.lighting == "overcast":
+        zenith, horizon = 0.85 * grey, 0.95 * grey
+    elif params.lighting == "dusk":
+        zenith = 0.45 * zenith + np.array([0.05, 0.06, 0.12])
+        horizon = 0.55 * horizon + np.array([0.40, 0.22, 0.10])
     return zenith, horizon
 
 
@@ -247,12 +252,20 @@ def write_shaders(folder, params: SceneParams, runway_heading_deg: float) -> Pat
     el = math.radians(params.sun_elevation_deg)
     # warmer, dimmer sun near the horizon
     sun_colour = np.array([1.0, 0.97, 0.92]) if el > math.radians(25) else np.array([1.0, 0.90, 0.78])
+    # SceneParams.lighting: overcast is diffuse light (little sun), dusk dim and warm
+    ambient, sun_gain, cloud_cover = 0.56, 0.56, params.cloud_cover
+    if params.lighting == "overcast":
+        ambient, sun_gain, cloud_cover = 0.78, 0.08, 1.0
+        sun_colour = np.array([0.97, 0.98, 1.0])
+    elif params.lighting == "dusk":
+        ambient, sun_gain = 0.30, 0.30
+        sun_colour = np.array([1.0, 0.72, 0.50])
     replacements = {
         "@SUN_X@": f"{sun[0]:.6f}", "@SUN_Y@": f"{sun[1]:.6f}", "@SUN_Z@": f"{sun[2]:.6f}",
         "@ZENITH@": _vec(zenith), "@HORIZON@": _vec(horizon), "@SUN_COLOUR@": _vec(sun_colour),
-        "@AMBIENT@": "0.56", "@SUN_GAIN@": "0.56",
+        "@AMBIENT@": f"{ambient:.2f}", "@SUN_GAIN@": f"{sun_gain:.2f}",
         "@EXTINCTION@": f"{2.996 / params.visibility_m:.9e}",
-        "@CLOUD_COVER@": f"{params.cloud_cover:.4f}",
+        "@CLOUD_COVER@": f"{cloud_cover:.4f}",
         "@MAX_TAPS@": f"{float(params.anisotropy):.1f}",
     }
     fragment = _FRAGMENT

@@ -24,7 +24,8 @@ from .markings import MarkingLayout
 
 __all__ = [
     "tileable_noise", "grass_detail", "pavement_detail", "cloud_texture", "fields_texture",
-    "runway_tile", "strip_texture", "coverage_of_rectangles", "SURFACE_COLOURS",
+    "runway_tile", "strip_texture", "coverage_of_rectangles", "coverage_of_polygons", "pre_threshold_tile",
+    "runway_patches", "SURFACE_COLOURS", "SURROUNDING_COLOURS",
 ]
 
 #: Base colours (sRGB 0-255) of the pavements and paints.
@@ -121,9 +122,22 @@ _FIELD_PALETTE = np.array([
     (122, 100, 72), (104, 86, 64), (78, 104, 46), (146, 140, 88), (98, 128, 70),
 ], dtype=float)
 
+#: Per surroundings (SceneParams.surroundings): field palette, airport grass, woods colour and
+#: the fractions of woods and built-up patches among the fields.
+SURROUNDING_COLOURS = {
+    "green": (_FIELD_PALETTE, (104.0, 138.0, 66.0), (46.0, 66.0, 34.0), 0.10, 0.03),
+    "dry": (np.array([(188, 168, 110), (170, 150, 96), (202, 182, 124), (150, 132, 88), (178, 160, 112),
+                      (160, 146, 100), (196, 176, 132)], dtype=float), (176, 160, 104), (92, 96, 60), 0.06, 0.03),
+    "sand": (np.array([(206, 186, 146), (196, 176, 136), (216, 196, 158), (186, 166, 126), (200, 184, 150)],
+                      dtype=float), (198, 180, 140), (120, 112, 80), 0.03, 0.02),
+    "snow": (np.array([(236, 239, 243), (226, 229, 236), (241, 243, 247), (214, 218, 226), (230, 232, 238)],
+                      dtype=float), (232, 235, 240), (52, 62, 56), 0.12, 0.03),
+    "urban": (_FIELD_PALETTE, (104.0, 138.0, 66.0), (46.0, 66.0, 34.0), 0.06, 0.70),
+}
+
 
 def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_xy_m, airport_rect_m,
-                   angle_deg: float = 17.0) -> np.ndarray:
+                   angle_deg: float = 17.0, surroundings: str = "green") -> np.ndarray:
     """Patchwork of fields, woods and hedges around an airport of mown grass, (size, size, 3).
 
     Parameters
@@ -134,7 +148,9 @@ def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_
     centre_xy_m : (x_c, y_c) runway-frame centre of the texture.
     airport_rect_m : (x0, x1, y0, y1) area of mown grass around the runway.
     angle_deg : direction of the field pattern relative to the runway.
+    surroundings : a key of :data:`SURROUNDING_COLOURS` (``urban``: mostly built-up blocks).
     """
+    palette, grass_rgb, woods_rgb, woods_frac, built_frac = SURROUNDING_COLOURS[surroundings]
     texel = extent_m / size
     coords = ((np.arange(size) + 0.5) * texel - extent_m / 2.0).astype(np.float32)
     x = np.float32(centre_xy_m[0]) + coords[None, :]
@@ -159,7 +175,7 @@ def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_
     field_id = strip * n_fields + field
     n_ids = n_strips * n_fields
     # per-field colour; woods (10 %) and built-up patches (3 %) get their own look below
-    colours = (_FIELD_PALETTE[rng.integers(0, len(_FIELD_PALETTE), n_ids)]
+    colours = (palette[rng.integers(0, len(palette), n_ids)]
                * rng.uniform(0.9, 1.08, n_ids)[:, None]).astype(np.float32)
     kind = rng.random(n_ids)
     image = colours[field_id]
@@ -167,10 +183,10 @@ def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_
     soil = tileable_noise((size, size), rng, beta=2.4).astype(np.float32)
     shade = 1.0 + np.sin(u * np.float32(2 * math.pi / 18.0)) * np.float32(0.035) + np.float32(0.06) * soil
     image *= shade[..., None]
-    woods = kind[field_id] < 0.10
+    woods = kind[field_id] < woods_frac
     blotch = tileable_noise((size, size), rng, beta=1.4).astype(np.float32)
-    image[woods] = np.array([46.0, 66.0, 34.0], np.float32) * (1.0 + 0.18 * blotch[woods])[:, None]
-    built = (kind[field_id] >= 0.10) & (kind[field_id] < 0.13)
+    image[woods] = np.array(woods_rgb, np.float32) * (1.0 + 0.18 * blotch[woods])[:, None]
+    built = (kind[field_id] >= woods_frac) & (kind[field_id] < woods_frac + built_frac)
     speck = rng.random(int(built.sum())).astype(np.float32)
     roofs = np.where(speck[:, None] < 0.35, np.array([150.0, 92.0, 76.0], np.float32),
                      np.array([128.0, 126.0, 118.0], np.float32))
@@ -179,12 +195,37 @@ def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_
     x0, x1, y0, y1 = airport_rect_m
     inside = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
     mowing = 1.0 + (np.floor((y - y0) / 12.0) % 2) * 0.035 + 0.05 * soil
-    grass = np.array([104.0, 138.0, 66.0], np.float32)[None, None, :] * np.broadcast_to(mowing, inside.shape)[..., None]
+    grass = np.array(grass_rgb, np.float32)[None, None, :] * np.broadcast_to(mowing, inside.shape)[..., None]
     image[inside] = grass[inside]
     return _to_uint8(image)
 
 
 # --------------------------------------------------------------------------- runway tiles
+def coverage_of_polygons(polygons_m, x_edges_m, y_edges_m, oversample: int = 4) -> np.ndarray:
+    """Area fraction of each texel covered by polygons ((n, 2) arrays of x, y in metres), (rows, cols).
+
+    Rasterised with ``cv2.fillPoly`` at ``oversample`` x ``oversample`` sub-texels (sub-pixel
+    vertices, 8 fractional bits) and averaged: the coverage is exact to about ``1 / oversample``
+    of a texel along the edges. Texels must be evenly spaced.
+    """
+    import cv2
+    rows, cols = len(y_edges_m) - 1, len(x_edges_m) - 1
+    dx = (x_edges_m[-1] - x_edges_m[0]) / cols
+    dy = (y_edges_m[-1] - y_edges_m[0]) / rows
+    mask = np.zeros((rows * oversample, cols * oversample), np.uint8)
+    shift = 8
+    pts = []
+    for poly in polygons_m:
+        poly = np.asarray(poly, dtype=float)
+        # sub-texel coordinates whose integer values are sub-texel centres
+        u = (poly[:, 0] - x_edges_m[0]) / dx * oversample - 0.5
+        v = (poly[:, 1] - y_edges_m[0]) / dy * oversample - 0.5
+        pts.append(np.rint(np.stack([u, v], axis=1) * (1 << shift)).astype(np.int32))
+    if pts:
+        cv2.fillPoly(mask, pts, 255, lineType=cv2.LINE_8, shift=shift)
+    return mask.reshape(rows, oversample, cols, oversample).mean(axis=(1, 3)) / 255.0
+
+
 def coverage_of_rectangles(rects_m, x_edges_m, y_edges_m) -> np.ndarray:
     """Exact area fraction of each texel covered by the union-free sum of axis-aligned rectangles.
 
@@ -256,9 +297,63 @@ def _smooth_noise(shape, rng, beta):
     return np.ascontiguousarray(field[:rows, :cols], dtype=np.float32)
 
 
+def runway_patches(runway: Runway, rng: np.random.Generator, x_from_m: float = 0.0) -> np.ndarray:
+    """Repair patches of a ``patched`` runway: rows ``x0, x1, y0, y1, tone`` (tone multiplies the pavement).
+
+    About one patch per 60 m, 6-80 m long, a lane of the runway or its full width, darker
+    (fresh asphalt) or lighter (concrete slabs); some start right at the threshold.
+    """
+    L, W = runway.length_m, runway.width_m
+    n = max(4, int((L - x_from_m) / 60.0))
+    out = []
+    for _ in range(n):
+        length = rng.uniform(6.0, 80.0)
+        x0 = rng.uniform(x_from_m, L - length)
+        if rng.random() < 0.35:
+            y0, y1 = -W / 2, W / 2
+        else:
+            w = rng.uniform(3.0, W / 2)
+            y0 = rng.uniform(-W / 2, W / 2 - w)
+            y1 = y0 + w
+        tone = rng.uniform(0.55, 0.8) if rng.random() < 0.6 else rng.uniform(1.35, 1.9)
+        out.append((x0, x0 + length, y0, y1, tone))
+    if x_from_m <= 0.0:
+        # a patch across the threshold (its edge is not the runway's)
+        out.append((0.0, rng.uniform(8.0, 40.0), -W / 2, W / 2, rng.uniform(0.6, 0.8)))
+    return np.array(out, dtype=float)
+
+
+def _paint(colour, coverage, paint_name, wear_alpha=1.0):
+    alpha = (coverage * wear_alpha).astype(np.float32)
+    paint = np.array(SURFACE_COLOURS[paint_name], dtype=np.float32)
+    return colour * (1 - alpha[..., None]) + paint * alpha[..., None]
+
+
+def pre_threshold_tile(x0_m: float, x1_m: float, runway: Runway, layout: MarkingLayout, surface: str, tone: float,
+                       texel_m: float, rng: np.random.Generator) -> np.ndarray:
+    """Pavement before the threshold (``x0_m < x1_m <= 0``) with its arrows or chevrons, (rows, cols, 3).
+
+    Same orientation as :func:`runway_tile`; ``tone`` multiplies the pavement colour (a blast pad
+    is often of another, older surface).
+    """
+    W = runway.width_m
+    cols = max(2, int(math.ceil((x1_m - x0_m) / texel_m)))
+    rows = max(2, int(math.ceil(W / texel_m)))
+    x_edges = np.linspace(x0_m, x1_m, cols + 1)
+    y_edges = np.linspace(-W / 2.0, W / 2.0, rows + 1)
+    base = np.array(SURFACE_COLOURS["concrete" if surface == "concrete" else "asphalt"], dtype=np.float32) * tone
+    noise = tileable_noise((rows, cols), rng, beta=2.4).astype(np.float32)
+    colour = base[None, None, :] * (1.0 + np.float32(0.06) * noise)[..., None]
+    for paint_name in ("paint_white", "paint_yellow"):
+        polys = [p for c, p in layout.polygons if c == paint_name]
+        if polys:
+            colour = _paint(colour, coverage_of_polygons(polys, x_edges, y_edges), paint_name, 0.9)
+    return _to_uint8(colour)
+
+
 def runway_tile(x0_m: float, x1_m: float, runway: Runway, layout: MarkingLayout, fields: RunwayFields,
                 surface: str, wear: float, rubber: float, texel_m: float, rng: np.random.Generator,
-                flat: bool = False) -> np.ndarray:
+                flat: bool = False, patches=None) -> np.ndarray:
     """The runway between ``x0_m`` and ``x1_m``, full width, with its markings, (rows, cols, 3).
 
     Columns run along x from ``x0_m`` (texel edges evenly spaced), rows along y from the left
@@ -274,9 +369,15 @@ def runway_tile(x0_m: float, x1_m: float, runway: Runway, layout: MarkingLayout,
     y_edges = np.linspace(-W / 2.0, W / 2.0, rows + 1)
     xc = 0.5 * (x_edges[:-1] + x_edges[1:])
     yc = 0.5 * (y_edges[:-1] + y_edges[1:])
-    base = np.array(SURFACE_COLOURS[surface], dtype=np.float32)
+    base = np.array(SURFACE_COLOURS["asphalt" if surface == "patched" else surface], dtype=np.float32)
     stain = fields.sample(fields.stain, xc, yc)
     colour = base[None, None, :] * (1.0 + np.float32(0.07) * stain)[..., None]
+    if patches is not None:
+        for px0, px1, py0, py1, tone in np.asarray(patches, dtype=float).reshape(-1, 5):
+            if px1 <= x0_m or px0 >= x1_m:
+                continue
+            cover = coverage_of_rectangles(np.array([[px0, px1, py0, py1]]), x_edges, y_edges).astype(np.float32)
+            colour = colour * (1.0 + np.float32(tone - 1.0) * cover)[..., None]
     if surface == "concrete":
         # slab joints every 7.5 m across and along (darker lines one texel wide)
         jx = np.abs(((xc + 3.75) % 7.5) - 3.75) < texel_m / 2
@@ -302,23 +403,30 @@ def strip_texture(kind: str, width_m: float, rng: np.random.Generator, texel_m: 
                   period_m: float = 12.0, flat: bool = False) -> np.ndarray:
     """One period of a taxiway or road strip, (rows across the width, cols along the length, 3).
 
-    ``kind``: ``"taxiway"`` (asphalt, yellow centre line 0.15 m) or ``"road"`` (asphalt, white
-    edge lines and a 3 m / 9 m dashed centre line). Rows span the width from one edge to the
+    ``kind``: ``"taxiway"`` (asphalt, yellow centre line 0.15 m), ``"road"`` (asphalt, white
+    edge lines and a 3 m / 9 m dashed centre line) or ``"runway"`` (a second runway: concrete,
+    side stripes, dashed centre line). Rows span the width from one edge to the
     other, columns one ``period_m`` along the strip (the texture repeats along it).
     """
     rows = max(4, int(math.ceil(width_m / texel_m)))
     cols = max(4, int(math.ceil(period_m / texel_m)))
-    if kind not in ("taxiway", "road"):
-        raise ValueError(f"kind must be 'taxiway' or 'road', got {kind!r}")
+    if kind not in ("taxiway", "road", "runway"):
+        raise ValueError(f"kind must be 'taxiway', 'road' or 'runway', got {kind!r}")
     if flat:
         return np.full((rows, cols, 3), 60, dtype=np.uint8)
-    base = np.array(SURFACE_COLOURS["taxiway_asphalt" if kind == "taxiway" else "road_asphalt"])
+    base = np.array(SURFACE_COLOURS[{"taxiway": "taxiway_asphalt", "road": "road_asphalt",
+                                     "runway": "concrete"}[kind]])
     colour = base[None, None, :] * (1.0 + 0.03 * rng.standard_normal((rows, cols)))[..., None]
     x_edges = np.linspace(0.0, period_m, cols + 1)
     y_edges = np.linspace(-width_m / 2, width_m / 2, rows + 1)
     if kind == "taxiway":
         rects = [(0.0, period_m, -0.075, 0.075)]
         paint_colour = SURFACE_COLOURS["paint_yellow"]
+    elif kind == "runway":
+        # a second runway seen from the side: centre line 30 m of every period, side stripes
+        rects = [(0.0, min(30.0, 0.6 * period_m), -0.45, 0.45), (0.0, period_m, -width_m / 2, -width_m / 2 + 0.9),
+                 (0.0, period_m, width_m / 2 - 0.9, width_m / 2)]
+        paint_colour = SURFACE_COLOURS["paint_white"]
     else:
         rects = [(0.0, 3.0, -0.06, 0.06), (0.0, period_m, -width_m / 2 + 0.3, -width_m / 2 + 0.45),
                  (0.0, period_m, width_m / 2 - 0.45, width_m / 2 - 0.3)]
