@@ -235,3 +235,27 @@ def test_cli_generates_a_small_dataset(tmp_path, capsys):
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["scene"]["style"] == "flat" and manifest["scenario"]["runway"]["width_m"] == 30.0
     assert manifest["image_size"] == [64, 64]
+
+
+
+@pytest.mark.slow
+def test_variety_and_runway_size_reach_runway_json_labels_and_manifest(tmp_path):
+    """--variety draws the runway and the scene; --runway-width and --markings override the draw;
+    runway.json and labels.csv follow the varied runway: the threshold's image span scales with
+    the width (same approach over a 45 m runway of the same length: ratio 27.5 / 45)."""
+    from visland.render.variety import draw_variety
+    spans = {}
+    for width in ("27.5", "45"):
+        out = tmp_path / f"ds{width}"
+        code = _cli(["generate", "--scenario", "thesis-3", "--out", str(out), "--size", "64", "--fps", "1",
+                     "--no-progress", "--variety", "5", "--runway-width", width, "--markings", "blast_pad"])
+        assert code == 0
+        labels = read_labels(out / "labels.csv")
+        spans[width] = np.asarray(labels["near_right_u_px"], float) - np.asarray(labels["near_left_u_px"], float)
+    drawn = draw_variety(5)
+    runway = json.loads((tmp_path / "ds27.5" / "runway.json").read_text())
+    assert runway["length_m"] == drawn.runway_length_m and runway["width_m"] == 27.5
+    manifest = json.loads((tmp_path / "ds27.5" / "manifest.json").read_text())
+    assert manifest["scene"] == json.loads(json.dumps(dict(drawn.scene.to_dict(), markings="blast_pad")))
+    ratio = spans["27.5"][:10] / spans["45"][:10]
+    assert np.allclose(ratio, 27.5 / 45.0, rtol=0.01), ratio
