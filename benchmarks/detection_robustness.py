@@ -92,13 +92,20 @@ def heat_map(summaries: dict, path: str, title: str) -> None:
             if not s:
                 continue
             c = s["near_corner_px"]
-            worst = c["max"] if c["max"] is not None else np.nan
-            values[i, j] = max(worst, 0.05) if np.isfinite(worst) else 200.0
-            found = f"{100 * s['found_rate']:.0f}%"
-            text[i][j] = (f"{c['median']:.2f} / {c['max']:.2f}" if c["max"] is not None else "-") + \
+            # colour: the worst near corner or edge of a frame reported found (a gross edge
+            # error with the corners withheld counts); nothing found: top of the scale
+            worst = max([v for v in (c["max"], s["edge_px"]["max"]) if v is not None], default=np.nan)
+            if c["max"] is None and not s["gross"]:
+                worst = np.nan                   # grey: nothing found, or found with the corners withheld
+            values[i, j] = max(worst, 0.05) if np.isfinite(worst) else np.nan
+            found = f"{100 * s['found_rate']:.0f}% found"
+            text[i][j] = (f"{c['median']:.2f} / {c['max']:.2f}" if c["max"] is not None
+                          else ("corners withheld" if s["found_rate"] > 0 else "")) + \
                 f"\n{found}" + (f"  {s['gross']} gross" if s["gross"] else "")
     fig, ax = plt.subplots(figsize=(9.5, 0.48 * len(names) + 1.6))
-    image = ax.imshow(values, cmap="RdYlGn_r", norm=LogNorm(vmin=0.1, vmax=50.0), aspect="auto")
+    cmap = matplotlib.colormaps["RdYlGn_r"].copy()
+    cmap.set_bad("#d0d0d0")
+    image = ax.imshow(np.ma.masked_invalid(values), cmap=cmap, norm=LogNorm(vmin=0.1, vmax=50.0), aspect="auto")
     for i in range(len(names)):
         for j in range(len(bands)):
             ax.text(j, i, text[i][j], ha="center", va="center", fontsize=6.5)
@@ -106,10 +113,43 @@ def heat_map(summaries: dict, path: str, title: str) -> None:
     ax.set_yticks(range(len(names)), names, fontsize=8)
     ax.set_xlabel("distance to the threshold")
     ax.set_title(title, fontsize=9)
-    fig.colorbar(image, ax=ax, label="near-corner error, worst frame (px); no corner found = top of scale")
+    fig.colorbar(image, ax=ax, label="worst near-corner or edge error of a found frame (px); grey: no corner reported")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def _report(all_rows, summaries, args) -> None:
+    from visland.detection.accuracy import format_table, summarise
+    print()
+    for line in format_table(summarise(all_rows, key="condition"), title="condition (all bands)"):
+        print(line)
+    print()
+    for line in format_table(summarise(all_rows), title="band (all conditions)"):
+        print(line)
+    if args.figure:
+        heat_map(summaries, args.figure, f"visland detection, {args.scenario} approach, {args.size} px, "
+                                         f"{len(args.distances)} frames per condition (acquisition, no tracking):\n"
+                                         "near-corner median / max px, found rate, gross errors")
+    print(json.dumps({"size": args.size, "distances_m": args.distances, "conditions": summaries}))
+
+
+def summarise_csv(args) -> int:
+    """Tables and heat map from the per-frame CSV of an earlier run."""
+    from visland.detection.accuracy import summarise
+    rows = []
+    with open(args.from_csv, newline="") as handle:
+        for raw in csv.DictReader(handle):
+            row = dict(raw)
+            for key in ("found", "gross", "corners_withheld"):
+                row[key] = int(row[key])
+            for key in ("distance_m", "confidence", "edge_px", "near_px", "near_along_px", "dpsi_err_deg"):
+                row[key] = float(row[key]) if row[key] not in ("", "nan") else math.nan
+            rows.append(row)
+    order = list(dict.fromkeys(r["condition"] for r in rows))
+    summaries = {name: summarise([r for r in rows if r["condition"] == name]) for name in order}
+    _report(rows, summaries, args)
+    return 0
 
 
 def main(argv=None) -> int:
@@ -120,14 +160,17 @@ def main(argv=None) -> int:
     parser.add_argument("--scenario", default="thesis-3")
     parser.add_argument("--out", default="/tmp/detection_robustness.csv", help="per-frame CSV")
     parser.add_argument("--figure", help="heat map PNG")
+    parser.add_argument("--from-csv", metavar="CSV", help="summarise a per-frame CSV of an earlier run (no rendering)")
     args = parser.parse_args(argv)
+    if args.from_csv:
+        return summarise_csv(args)
     unknown = [c for c in args.conditions if c not in CONDITIONS]
     if unknown:
         parser.error(f"unknown conditions {unknown}; known: {', '.join(CONDITIONS)}")
 
     from visland.camera import CameraModel
     from visland.detection import DetectorParams, detect_runway
-    from visland.detection.accuracy import band_of, format_table, frame_errors, summarise
+    from visland.detection.accuracy import band_of, frame_errors, summarise
     from visland.features import batch_R_camera_from_runway, ideal_features
     from visland.flight import simulate_flight
     from visland.render import FrameRenderer
@@ -178,17 +221,7 @@ def main(argv=None) -> int:
                   f"{s['near_corner_px']['median']}/{s['near_corner_px']['p95']}/{s['near_corner_px']['max']} px  "
                   f"edge p95 {s['edge_px']['p95']} px  |dpsi| med {s['dpsi_abs_err_deg']['median']} deg  "
                   f"({time.perf_counter() - t0:.0f} s)", flush=True)
-    print()
-    for line in format_table(summarise(all_rows, key="condition"), title="condition (all bands)"):
-        print(line)
-    print()
-    for line in format_table(summarise(all_rows), title="band (all conditions)"):
-        print(line)
-    if args.figure:
-        heat_map(summaries, args.figure, f"visland detection, {args.scenario} approach, {args.size} px, "
-                                         f"{len(args.distances)} frames per condition (acquisition, no tracking): "
-                                         "near-corner median / max px, found rate")
-    print(json.dumps({"size": args.size, "distances_m": args.distances, "conditions": summaries}))
+    _report(all_rows, summaries, args)
     return 0
 
 
