@@ -59,8 +59,9 @@ class ProcessOptions:
         parse_source(self.source)
         if not self.observers:
             raise ValueError("--observer: give at least one observer name")
-        if self.fps is not None and not (math.isfinite(self.fps) and self.fps > 0):
-            raise ValueError(f"--fps must be a positive number, got {self.fps!r}")
+        from visland.limits import FPS_LIMIT
+        if self.fps is not None and not (math.isfinite(self.fps) and FPS_LIMIT.low <= self.fps <= FPS_LIMIT.high):
+            raise ValueError(f"--fps must be a frame rate in {FPS_LIMIT.low:g}..{FPS_LIMIT.high:g} Hz, got {self.fps!r}")
         if self.initial_height_m is not None and not (math.isfinite(self.initial_height_m)
                                                       and 0 < self.initial_height_m <= 30000):
             raise ValueError(f"--initial-height must be a positive number of metres up to 30000 (the plausible "
@@ -188,7 +189,8 @@ def _check_agreement(source, options: ProcessOptions) -> None:
     """What only the inputs together can tell, checked before the first frame is measured
     (issue 20 item 2): the camera's plausibility, frame times against the telemetry rate, truth
     and labels (one row per frame, at the frame times), the labels' pixels in the image."""
-    from visland.limits import check_camera, check_frame_times, check_pixels, check_telemetry_rate
+    from visland.limits import (check_camera, check_frame_times, check_pixels, check_rows_at_frames,
+                                check_telemetry_rate)
     times = np.asarray(source.times_s, dtype=float)
     how = ("frame times (--fps)" if options.fps is not None and options.frames_csv is None else
            f"frame times of {source.name}")
@@ -197,15 +199,8 @@ def _check_agreement(source, options: ProcessOptions) -> None:
     if source.telemetry is not None:
         check_telemetry_rate(source.telemetry["t_s"], times, str(source.telemetry.path))
     for table, what in ((source.truth, "truth"), (source.labels, "labels")):
-        if table is None:
-            continue
-        if table.n_rows != len(times):
-            raise ValueError(f"{table.path}: {table.n_rows} rows but there are {len(times)} frames (one row per frame)")
-        off = np.nonzero(np.abs(table["t_s"] - times) > 1e-6)[0]
-        if off.size:
-            i = int(off[0])
-            raise ValueError(f"{table.path} line {i + 2}: t_s is {table['t_s'][i]:g} s but frame {i} is at "
-                             f"{times[i]:g} s ({how}); the {what} must have one row per frame at the frame times")
+        if table is not None:
+            check_rows_at_frames(table, times, how, what)
     if source.labels is not None:
         check_pixels(source.labels, source.camera.width, source.camera.height)
 

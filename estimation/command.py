@@ -98,7 +98,7 @@ def _read_inputs(folder: Path, measurements: str):
         path = Path(measurements)
         table = read_measurements(path)
     check_pixels(table, camera.width, camera.height, rows=(table["found"] > 0.5) if "found" in table else None)
-    check_telemetry_rate(telemetry["t_s"], table["t_s"], str(folder / "telemetry.csv"))
+    check_telemetry_rate(telemetry["t_s"], table["t_s"], str(folder / "telemetry.csv"), f"times of {path}")
     features = FeatureSeries.from_table(table)
     truth = None
     truth_path = folder / "truth.csv"

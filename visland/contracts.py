@@ -383,6 +383,7 @@ def _check_frames_and_flags(table: Table) -> None:
             i = int(bad[0]) + 1
             raise ValueError(f"{table.path} line {i + 2}: frame {frames[i]:g} after frame {frames[i - 1]:g} (one row "
                              "per frame, in order)")
+    found = table["found"] > 0.5 if "found" in table else np.ones(table.n_rows, dtype=bool)
     for corner in CORNER_NAMES:
         column = f"{corner}_visible"
         if column in table:
@@ -391,6 +392,15 @@ def _check_frames_and_flags(table: Table) -> None:
             if bad.size:
                 i = int(bad[0])
                 raise ValueError(f"{table.path} line {i + 2}: column '{column}' is {values[i]:g} (0 or 1 is required)")
+            for axis in ("u", "v"):
+                cells = table.get(f"{corner}_{axis}_px")
+                if cells is None:
+                    continue
+                bad = np.nonzero((values == 1.0) & found & ~np.isfinite(cells))[0]
+                if bad.size:
+                    i = int(bad[0])
+                    raise ValueError(f"{table.path} line {i + 2}: column '{corner}_{axis}_px' is empty but "
+                                     f"'{column}' is 1 (a visible corner has its pixel)")
 
 
 def read_frames_csv(path) -> Table:

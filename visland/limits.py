@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["Limit", "COLUMN_LIMITS", "FRAME_INTERVAL_S", "PIXEL_MARGIN", "FOCAL_PER_SIDE", "MAX_IMAGE_SIDE_PX",
-           "MOUNT_LIMITS_DEG", "check_columns", "check_frame_times", "check_telemetry_rate", "check_pixels",
+           "MOUNT_LIMITS_DEG", "PRINCIPAL_POINT_SPREAD", "FPS_LIMIT", "check_rows_at_frames", "check_columns", "check_frame_times", "check_telemetry_rate", "check_pixels",
            "check_camera", "markdown_table"]
 
 
@@ -55,8 +55,8 @@ COLUMN_LIMITS = {
     "p_dps": _RATE, "q_dps": _RATE, "r_dps": _RATE,
     "vn_mps": _VELOCITY, "ve_mps": _VELOCITY, "vd_mps": _VELOCITY,
     "tas_mps": Limit(1e-3, 1000.0, "m/s", "true airspeed: positive, Mach 3 at most"),
-    "dx_m": Limit(-1e6, 1e6, "m", "along-track distance: 1000 km"),
-    "dy_m": Limit(-1e6, 1e6, "m", "cross-track distance: 1000 km"),
+    "dx_m": Limit(-1e5, 1e5, "m", "along-track distance: a visual approach starts within 100 km"),
+    "dy_m": Limit(-1e5, 1e5, "m", "cross-track distance: 100 km"),
     "dh_m": Limit(-1000.0, 30000.0, "m", "height above the runway: 1 km below to 30 km above"),
     "dpsi_deg": Limit(-180.0, 180.0, "deg", "a heading deviation"),
     **{f"{corner}_{axis}_px": _PIXEL for corner in ("near_left", "near_right", "far_left", "far_right")
@@ -73,6 +73,10 @@ PIXEL_MARGIN = 1.0
 #: Focal length against the larger image side: a 0.5 deg to 170 deg field of view.
 FOCAL_PER_SIDE = Limit(0.04, 100.0, "x side", "fx and fy over the image side: fields of view of 170 deg to 0.6 deg")
 MAX_IMAGE_SIDE_PX = 16384
+#: The principal point lies within this fraction of the side from the image centre.
+PRINCIPAL_POINT_SPREAD = 0.25
+#: --fps: frames at 0.1 Hz to 10 kHz (the inverse of :data:`FRAME_INTERVAL_S`).
+FPS_LIMIT = Limit(0.1, 1e4, "Hz", "a camera frame rate")
 #: Camera mounting (roll, pitch, yaw) relative to the body: a forward-looking camera.
 MOUNT_LIMITS_DEG = (Limit(-180.0, 180.0, "deg", "mount roll"), Limit(-60.0, 60.0, "deg", "mount pitch: forward-looking"),
                     Limit(-60.0, 60.0, "deg", "mount yaw: forward-looking"))
@@ -116,10 +120,16 @@ def check_frame_times(times_s, name: str) -> None:
                          f"{limit.describe()}")
 
 
-def check_telemetry_rate(telemetry_t_s, frame_t_s, name: str) -> None:
+def check_telemetry_rate(telemetry_t_s, frame_t_s, name: str, frames_name: str = "") -> None:
     """SPEC: telemetry at a rate >= the frame rate, over the frames' span (median intervals)."""
     telemetry = np.asarray(telemetry_t_s, dtype=float)
     frames = np.asarray(frame_t_s, dtype=float)
+    if telemetry.size and frames.size:
+        outside = np.nonzero((frames < telemetry[0] - 1e-6) | (frames > telemetry[-1] + 1e-6))[0]
+        if outside.size:
+            i = int(outside[0])
+            raise ValueError(f"{name}: telemetry covers {telemetry[0]:g}..{telemetry[-1]:g} s but frame {i} is at "
+                             f"t = {frames[i]:g} s{' (' + frames_name + ')' if frames_name else ''}")
     if telemetry.size < 2 or frames.size < 2:
         return
     inside = telemetry[(telemetry >= frames[0]) & (telemetry <= frames[-1])]
@@ -130,6 +140,18 @@ def check_telemetry_rate(telemetry_t_s, frame_t_s, name: str) -> None:
         raise ValueError(f"{name}: one sample every {telemetry_step:g} s ({inside.size} over the frames' {span:g} s), "
                          f"sparser than the frames (every {frame_step:g} s); the telemetry must come at a rate >= "
                          "the frame rate, times in seconds")
+
+
+def check_rows_at_frames(table, times_s, how: str, what: str) -> None:
+    """``table`` (truth, labels) has one row per frame, at the frame times ``times_s``."""
+    times = np.asarray(times_s, dtype=float)
+    if table.n_rows != len(times):
+        raise ValueError(f"{table.path}: {table.n_rows} rows but there are {len(times)} frames (one row per frame)")
+    off = np.nonzero(np.abs(table["t_s"] - times) > 1e-6)[0]
+    if off.size:
+        i = int(off[0])
+        raise ValueError(f"{table.path} line {i + 2}: t_s is {table['t_s'][i]:g} s but frame {i} is at {times[i]:g} s "
+                         f"({how}); the {what} must have one row per frame at the frame times")
 
 
 def check_pixels(table, width: int, height: int, name: str | None = None, rows=None) -> None:
@@ -171,8 +193,10 @@ def check_camera(camera, name: str) -> None:
                              f"{limit.high * side:g} px for a {camera.width}x{camera.height} image ({limit.why})")
     for key, size in (("cx", camera.width), ("cy", camera.height)):
         value = getattr(camera, key)
-        if not -0.5 <= value <= size - 0.5:
-            raise ValueError(f"{name}: field '{key}' is {value:g} px, outside the image (-0.5..{size - 0.5:g} px)")
+        low, high = (size - 1) / 2 - PRINCIPAL_POINT_SPREAD * size, (size - 1) / 2 + PRINCIPAL_POINT_SPREAD * size
+        if not low <= value <= high:
+            raise ValueError(f"{name}: field '{key}' is {value:g} px, outside the plausible {low:g}..{high:g} px "
+                             f"(the middle half of the {size} px side: a lens centred on its sensor)")
     for k, (angle, limit) in enumerate(zip(camera.mount_rpy_rad, MOUNT_LIMITS_DEG)):
         degrees = math.degrees(angle)
         if not limit.low <= degrees <= limit.high:
@@ -196,7 +220,9 @@ def markdown_table() -> str:
                 f"{1 + PIXEL_MARGIN:g} image sizes | a visible or found corner lies near the frame |")
     rows.append(f"| `fx`, `fy` | {FOCAL_PER_SIDE.low:g} .. {FOCAL_PER_SIDE.high:g} x the larger image side | "
                 f"{FOCAL_PER_SIDE.why} |")
-    rows.append("| `cx`, `cy` | -0.5 .. size - 0.5 px | the principal point lies in the image |")
+    rows.append(f"| `cx`, `cy` | (size - 1) / 2 +- {PRINCIPAL_POINT_SPREAD:g} x size px | a lens centred on its "
+                "sensor |")
+    rows.append(f"| `--fps` | {FPS_LIMIT.low:g} .. {FPS_LIMIT.high:g} Hz | {FPS_LIMIT.why} |")
     rows.append(f"| `width`, `height` | 1 .. {MAX_IMAGE_SIDE_PX} px, equal to the frames' | every frame of another "
                 "size is flagged; a run where none fits says so |")
     rows.append("| `mount_rpy_deg` | " + ", ".join(f"{m.low:g} .. {m.high:g}" for m in MOUNT_LIMITS_DEG)

@@ -10,6 +10,7 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from visland.cli import main
@@ -108,7 +109,7 @@ def test_telemetry_sparser_than_the_frames_is_refused(simulated):
     check_telemetry_rate(table["t_s"], frame_times, "telemetry.csv")              # 50 Hz against 25 Hz
     check_telemetry_rate(table["t_s"][::2], frame_times, "telemetry.csv")         # 25 Hz: still >= the frames
     with pytest.raises(ValueError, match="sparser than the frames"):
-        check_telemetry_rate(table["t_s"][::5], frame_times, "telemetry.csv")     # 10 Hz
+        check_telemetry_rate(np.append(table["t_s"][:-1:5], table["t_s"][-1]), frame_times, "telemetry.csv")  # 10 Hz
 
 
 @pytest.mark.parametrize("field, value, expected", [
@@ -258,3 +259,27 @@ def test_detect_and_track_refuse_an_implausible_camera_first(simulated, tmp_path
     (folder / "camera.json").write_text(json.dumps(data))
     assert main([command, str(folder), "--out", str(tmp_path / "m.csv")]) == 2
     assert f"{folder / 'camera.json'}: field 'fx' is 1e+09 px, outside the plausible" in capsys.readouterr().err
+
+
+def test_a_visible_corner_without_its_pixel_is_refused(simulated, tmp_path):
+    path = tmp_path / "labels.csv"
+    shutil.copy(simulated / "labels.csv", path)
+    _set_cell(path, "near_right_u_px", "")
+    with pytest.raises(ValueError, match=re.escape(f"{path} line 4: column 'near_right_u_px' is empty but "
+                                                   "'near_right_visible' is 1")):
+        read_labels(path)
+
+
+def test_an_off_centre_principal_point_and_an_absurd_fps_are_refused(simulated, tmp_path):
+    from visland.camera import CameraModel
+    from visland.datasets.process import ProcessOptions
+    camera = CameraModel.load(simulated / "camera.json")
+    check_camera(camera, "camera.json")
+    data = json.loads((simulated / "camera.json").read_text())
+    data["cx"] = 0.0
+    path = tmp_path / "camera.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match=re.escape("camera.json: field 'cx' is 0 px, outside the plausible")):
+        check_camera(CameraModel.load(path), "camera.json")
+    with pytest.raises(ValueError, match=re.escape("--fps must be a frame rate in 0.1..10000 Hz, got 1e+308")):
+        ProcessOptions(fps=1e308)
