@@ -518,7 +518,8 @@ def _flagged(out: Path, text: str) -> bool:
     run = out / "run" / "run.json"
     if run.exists():
         data = json.loads(run.read_text())
-        return bool(data.get("n_flagged") or data.get("no_estimates"))
+        if data.get("n_flagged") or data.get("no_estimates"):
+            return True
     for csv in (out / "run" / "measurements.csv", out / "m.csv"):
         if csv.exists():
             from visland.contracts import read_csv
