@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import re
 import shutil
 import subprocess
@@ -60,16 +61,25 @@ def main(argv=None) -> int:
         folder = work / "videos" / name
         folder.mkdir(parents=True, exist_ok=True)
         video = folder / f"{name}.mp4"
+        # the recorder's telemetry runs longer than the video: the video starts and stops a few
+        # frames inside it, so the telemetry covers every frame whatever the offset
+        trim = int(math.ceil(abs(args.offset) * args.fps)) + 1
+        frames = sorted((dataset / "frames").glob("*.png"))[trim:-trim]
         if not video.exists():
-            frames = sorted((dataset / "frames").glob("*.png"))
             first = cv2.imread(str(frames[0]))
             writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"mp4v"), args.fps,
                                      (first.shape[1], first.shape[0]))
             for path in frames:
                 writer.write(cv2.imread(str(path)))
             writer.release()
-        for file in ("camera.json", "truth.csv", "frames.csv"):
-            shutil.copy(dataset / file, folder / file)
+        shutil.copy(dataset / "camera.json", folder / "camera.json")
+        for file in ("truth.csv", "frames.csv"):
+            lines = (dataset / file).read_text().splitlines()
+            kept = lines[1 + trim:len(lines) - trim]
+            column = lines[0].split(",").index("frame")        # frame indices of the video, from 0
+            kept = [",".join(str(k) if c == column else cell for c, cell in enumerate(line.split(",")))
+                    for k, line in enumerate(kept)]
+            (folder / file).write_text("\n".join([lines[0]] + kept) + "\n")
         lines = (dataset / "telemetry.csv").read_text().splitlines()
         shifted = [lines[0]] + [re.sub(r"^[^,]+", lambda m: f"{float(m.group(0)) - args.offset:.6f}", line)
                                 for line in lines[1:]]

@@ -73,23 +73,20 @@ class ProcessOptions:
 
 
 def _align_clocks(source, options: ProcessOptions, echo) -> None:
-    """Shift the telemetry onto the frames' clock: by ``--time-offset``, or by the offset
-    estimated from the frames (``--estimate-offset``, :mod:`visland.clocks`); an estimate the
-    data do not support is said and the given offset (default 0) is used."""
-    offset = options.time_offset_s
-    if options.estimate_offset:
-        from visland.clocks import estimate_time_offset
-        try:
-            found = estimate_time_offset(source)
-        except ValueError as error:
-            echo(f"clock offset not estimated: {error}; using {offset:+.3f} s")
-        else:
-            offset = found.offset_s
-            echo(f"clock offset estimated from the horizon's roll against the telemetry's: {offset:+.3f} s "
-                 f"+- {found.sigma_s:.3f} s (one sigma, {found.frames_used} frames, residual "
-                 f"{found.residual_deg:.2f} deg)")
-    if offset:
-        source.shift_telemetry(offset)
+    """With ``--estimate-offset``, shift the telemetry (already moved by ``--time-offset`` when
+    the source was opened) by the offset estimated from the frames (:mod:`visland.clocks`); an
+    estimate the data do not support is said and the telemetry stays as it is."""
+    if not options.estimate_offset:
+        return
+    from visland.clocks import estimate_time_offset
+    try:
+        found = estimate_time_offset(source)
+    except ValueError as error:
+        echo(f"clock offset not estimated: {error}; using --time-offset ({options.time_offset_s:+.3f} s)")
+        return
+    echo(f"clock offset estimated from the horizon's roll against the telemetry's: {found.offset_s:+.3f} s "
+         f"+- {found.sigma_s:.3f} s (one sigma, {found.frames_used} frames, residual {found.residual_deg:.2f} deg)")
+    source.shift_telemetry(found.offset_s)
 
 
 def _scenario_of(source) -> str | None:
@@ -147,7 +144,7 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
         replace(options, source=source_kind)               # validates the kind
     _check_paths(input_path, out_dirs, options, force)
     source = open_source(input_path, camera=options.camera, telemetry=options.telemetry,
-                         frames_csv=options.frames_csv, fps=options.fps)
+                         frames_csv=options.frames_csv, fps=options.fps, time_offset_s=options.time_offset_s)
     _align_clocks(source, options, echo)
     if source.truth is None and options.initial_height_m is None:
         raise ValueError(f"{input_path}: no truth.csv, so give the initial height guess with --initial-height M")

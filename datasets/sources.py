@@ -57,8 +57,9 @@ class FrameSource:
 class FolderSource(FrameSource):
     """A SPEC frame folder (see :class:`visland.folder.FrameFolder`)."""
 
-    def __init__(self, root, camera=None, telemetry=None, frames_csv=None, fps=None):
-        self.folder = FrameFolder(root, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps)
+    def __init__(self, root, camera=None, telemetry=None, frames_csv=None, fps=None, time_offset_s=0.0):
+        self.folder = FrameFolder(root, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps,
+                                  time_offset_s=time_offset_s)
         self.name = str(self.folder.root)
         self.camera = self.folder.camera
         self.times_s = self.folder.times_s
@@ -94,7 +95,7 @@ class VideoSource(FrameSource):
     else from ``fps`` if given, else from the video's own frame rate.
     """
 
-    def __init__(self, path, camera=None, telemetry=None, frames_csv=None, fps=None):
+    def __init__(self, path, camera=None, telemetry=None, frames_csv=None, fps=None, time_offset_s=0.0):
         import cv2
         self.path = Path(path)
         self.name = str(self.path)
@@ -130,6 +131,7 @@ class VideoSource(FrameSource):
             raise ValueError(f"{telemetry_path}: telemetry file not found; estimation needs inertial data (give "
                              "--telemetry FILE), and `visland detect` finds the runway in frames alone")
         self.telemetry = read_telemetry(telemetry_path)
+        self.telemetry["t_s"] = self.telemetry["t_s"] + float(time_offset_s)      # onto the frames' clock
         self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(telemetry_path))
         truth = here / "truth.csv"
         self.truth = read_truth(truth) if truth.exists() else None
@@ -203,15 +205,17 @@ def _count_frames(capture) -> int:
     return count
 
 
-def open_source(path, camera=None, telemetry=None, frames_csv=None, fps=None) -> FrameSource:
+def open_source(path, camera=None, telemetry=None, frames_csv=None, fps=None, time_offset_s=0.0) -> FrameSource:
     """A frame folder or a video file, by what ``path`` is."""
     path = Path(path)
     if path.is_dir():
         if not (path / "frames").exists() and (path / "labels.csv").exists():
             return LabelsSource(path, camera=camera, telemetry=telemetry)
-        return FolderSource(path, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps)
+        return FolderSource(path, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps,
+                            time_offset_s=time_offset_s)
     if path.is_file() and path.suffix.lower() in VIDEO_SUFFIXES:
-        return VideoSource(path, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps)
+        return VideoSource(path, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps,
+                           time_offset_s=time_offset_s)
     if not path.exists():
         raise ValueError(f"{path}: input not found (give a frame folder or a video file)")
     raise ValueError(f"{path}: not a frame folder nor a video ({', '.join(VIDEO_SUFFIXES)})")

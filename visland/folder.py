@@ -131,12 +131,13 @@ class FrameFolder:
     telemetry : path overriding ``root/telemetry.csv``.
     frames_csv : path overriding ``root/frames.csv``.
     fps : frame rate used when there is no frames.csv (default 25 Hz).
+    time_offset_s : seconds added to the telemetry's times (its clock against the frames', :mod:`visland.clocks`).
     require_telemetry : raise if no telemetry (detection can run without it only with a guess
         of the horizon, so by default it is required).
     """
 
     def __init__(self, root, camera: CameraModel | str | Path | None = None, telemetry=None, frames_csv=None,
-                 fps: float | None = None, require_telemetry: bool = True):
+                 fps: float | None = None, require_telemetry: bool = True, time_offset_s: float = 0.0):
         self.root = Path(root)
         if not self.root.is_dir():
             raise ValueError(f"{self.root}: input folder not found")
@@ -162,6 +163,7 @@ class FrameFolder:
         telemetry_path = Path(telemetry) if telemetry else self.root / "telemetry.csv"
         if telemetry_path.exists():
             self.telemetry = read_telemetry(telemetry_path)
+            self.telemetry["t_s"] = self.telemetry["t_s"] + float(time_offset_s)    # onto the frames' clock
             self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(telemetry_path))
         elif require_telemetry:
             raise ValueError(f"{telemetry_path}: telemetry file not found; estimation needs inertial data (give "

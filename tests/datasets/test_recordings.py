@@ -126,3 +126,6 @@ def test_time_offset_moves_the_telemetry_onto_the_frames_clock(tmp_path):
     source.shift_telemetry(0.5)
     roll = np.degrees(source.inertial.roll_rad)
     assert roll[14] == pytest.approx(0.0) and roll[15] == pytest.approx(10.0)
+    # the same given when the recording is opened (--time-offset), before interpolating
+    roll = np.degrees(open_source(folder, time_offset_s=0.5).inertial.roll_rad)
+    assert roll[14] == pytest.approx(0.0) and roll[15] == pytest.approx(10.0)
