@@ -152,7 +152,17 @@ def _cmd_mask(args) -> int:
     for path in (out, picture):
         if path.exists() and not args.force:
             raise ValueError(f"{path}: output file exists; choose another --out or pass --force to replace it")
-    camera = CameraModel.load(args.camera) if args.camera else None
+    camera_data = None
+    if args.camera:
+        from visland.userfiles import read_json_object
+        camera_data = read_json_object(Path(args.camera), "camera file")
+        # the mask this command is about to (re)write is not read: it may not exist yet
+        camera = CameraModel.from_json_dict({k: v for k, v in camera_data.items() if k != "mask"},
+                                            source=str(args.camera))
+    else:
+        camera = None
+    if args.update_camera and camera is None:
+        raise ValueError("--update-camera needs --camera FILE (the camera.json to add the mask to)")
     overrides = {name: getattr(args, name) for name in ("max_static_std", "dilate_px") if getattr(args, name) is not None}
     params = MaskParams(**overrides)
     if args.samples < 5:
@@ -177,7 +187,13 @@ def _cmd_mask(args) -> int:
         print("no structure found (nothing steady and dark or edged touches the image border): no mask needed, "
               "or draw polygons by hand")
         return 0
-    print(f"add to {where}: \"mask\": \"{relative}\"")
+    if args.update_camera:
+        import json
+        camera_data["mask"] = relative
+        Path(args.camera).write_text(json.dumps(camera_data, indent=2) + "\n")
+        print(f"{args.camera}: \"mask\": \"{relative}\" set")
+    else:
+        print(f"add to {where}: \"mask\": \"{relative}\" (or rerun with --update-camera)")
     return 0
 
 
@@ -228,6 +244,8 @@ def register(subparsers):
     p.add_argument("--picture", metavar="FILE.png", help="check picture (default: OUT with -check before .png)")
     p.add_argument("--camera", metavar="FILE", help="camera.json the mask goes with (checks the size; the printed "
                                                      "path is relative to its folder)")
+    p.add_argument("--update-camera", action="store_true",
+                   help="write the \"mask\" field into the --camera file instead of printing the line")
     p.add_argument("--samples", type=int, default=40, metavar="N",
                    help="frames sampled evenly over the footage (default 40)")
     p.add_argument("--max-static-std", type=float, default=None, metavar="GREY",

@@ -80,3 +80,26 @@ def test_mask_command_writes_mask_picture_and_camera_line(cockpit, tmp_path, cap
     assert main(["mask", str(tmp_path / "clip"), "--out", str(tmp_path / "m2.png"), "--camera", str(other)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "320x240" in err[0] and "640x480" in err[0]
+
+
+def test_update_camera_writes_the_mask_field_that_camera_json_reads(cockpit, tmp_path, capsys):
+    import json
+
+    from visland.camera import CameraModel
+    frames, truth = cockpit
+    folder = tmp_path / "clip"
+    folder.mkdir()
+    for k, frame in enumerate(frames[::3]):
+        cv2.imwrite(str(folder / f"{k:04d}.png"), frame)
+    camera_path = tmp_path / "camera.json"
+    assert main(["calibrate", "--hfov-deg", "70", "--size", f"{SIZE[0]}x{SIZE[1]}", "--out", str(camera_path)]) == 0
+    # the line was added before the mask existed: the command must still run (it does not read that mask)
+    data = json.loads(camera_path.read_text())
+    data["mask"] = "mask.png"
+    camera_path.write_text(json.dumps(data))
+    out = tmp_path / "mask.png"
+    assert main(["mask", str(folder), "--out", str(out), "--camera", str(camera_path), "--update-camera"]) == 0
+    assert json.loads(camera_path.read_text())["mask"] == "mask.png"
+    camera = CameraModel.load(camera_path)
+    structure = camera.structure_mask()
+    assert structure[truth].mean() >= 0.95 and structure[~truth].mean() < 0.02
