@@ -49,13 +49,6 @@ class PixelLine:
     def normal(self) -> np.ndarray:
         return np.array([-self.direction[1], self.direction[0]])
 
-    @classmethod
-    def through(cls, uv_a, uv_b) -> "PixelLine":
-        a = np.asarray(uv_a, float)
-        b = np.asarray(uv_b, float)
-        e = b - a
-        return cls(a, e / np.linalg.norm(e))
-
     def distance(self, uv) -> np.ndarray:
         """Signed distance (pixels) of points ``(..., 2)`` along the normal."""
         return (np.asarray(uv, float) - self.point) @ self.normal

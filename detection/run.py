@@ -10,7 +10,6 @@ raises on a bad frame.
 """
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,6 +18,7 @@ from visland.contracts import MEASUREMENT_COLUMNS, write_csv
 from visland.detection.params import DetectorParams
 from visland.detection.result import not_found
 from visland.detection.sequence import DetectionSequence
+from visland.progress import progress_bar
 
 __all__ = ["FolderDetection", "detect_folder", "write_measurements"]
 
@@ -53,28 +53,33 @@ def detect_folder(folder, params: DetectorParams | None = None, progress: bool =
     sequence = DetectionSequence(folder.camera, params)
     start = time.perf_counter()
     n = len(folder) if max_frames is None else min(len(folder), max_frames)
-    for index in range(n):
-        t_s = float(folder.times_s[index])
-        image, reason = folder.read_frame(index, gray=False)      # colour: the chroma places the threshold
-        if image is None:
-            result = not_found(reason)
-            out.n_unusable += 1
-        else:
-            tic = time.perf_counter()
-            if folder.inertial is None:      # no telemetry: the horizon is read off the frame
-                roll, pitch = None, None
-            else:
-                roll, pitch = float(folder.inertial.roll_rad[index]), float(folder.inertial.pitch_rad[index])
-            result = sequence(image, roll, pitch, t_s)
-            out.analysis_s += time.perf_counter() - tic
-        if result.found:
-            out.n_found += 1
-            out.n_tracking += result.mode == "tracking"
-        out.rows.append(result.to_measurement_row(frame=index, t_s=t_s))
-        if progress:
-            _progress(index + 1, n, start, out.n_found)
+    with progress_bar(n, "detect", enabled=progress) as bar:
+        for index in range(n):
+            _detect_one(folder, index, sequence, out)
+            bar.update()
     out.wall_s = time.perf_counter() - start
     return out
+
+
+def _detect_one(folder, index: int, sequence: DetectionSequence, out: FolderDetection) -> None:
+    """One frame of :func:`detect_folder`: its row in ``out``."""
+    t_s = float(folder.times_s[index])
+    image, reason = folder.read_frame(index, gray=False)      # colour: the chroma places the threshold
+    if image is None:
+        result = not_found(reason)
+        out.n_unusable += 1
+    else:
+        tic = time.perf_counter()
+        if folder.inertial is None:      # no telemetry: the horizon is read off the frame
+            roll, pitch = None, None
+        else:
+            roll, pitch = float(folder.inertial.roll_rad[index]), float(folder.inertial.pitch_rad[index])
+        result = sequence(image, roll, pitch, t_s)
+        out.analysis_s += time.perf_counter() - tic
+    if result.found:
+        out.n_found += 1
+        out.n_tracking += result.mode == "tracking"
+    out.rows.append(result.to_measurement_row(frame=index, t_s=t_s))
 
 
 def write_measurements(result: FolderDetection, path) -> None:
@@ -83,16 +88,3 @@ def write_measurements(result: FolderDetection, path) -> None:
     if path.parent and not path.parent.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
     write_csv(path, result.columns(), MEASUREMENT_COLUMNS)
-
-
-def _progress(done: int, total: int, start: float, found: int) -> None:
-    """One progress line on stderr (rewritten in place on a terminal, every 100 frames otherwise)."""
-    if not sys.stderr.isatty() and done != total and done % 100:
-        return
-    elapsed = time.perf_counter() - start
-    rate = done / elapsed if elapsed > 0 else 0.0
-    width = 30
-    filled = int(width * done / max(total, 1))
-    end = "\n" if done == total or not sys.stderr.isatty() else "\r"
-    print(f"detect [{'#' * filled}{'.' * (width - filled)}] {done}/{total} frames, runway in {found}, "
-          f"{rate:5.1f} frames/s", end=end, file=sys.stderr, flush=True)
