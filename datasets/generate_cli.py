@@ -66,6 +66,9 @@ def register(subparsers) -> None:
     scene.add_argument("--vignetting", type=float, metavar="0..0.6", help="corner light fall-off")
     scene.add_argument("--jpeg", type=int, metavar="QUALITY", dest="jpeg_quality",
                        help="JPEG compression quality 5-100 applied to every frame (0: none)")
+    scene.add_argument("--distortion", metavar="K1,K2,P1,P2,K3",
+                       help="lens distortion of the camera (OpenCV coefficients, written to camera.json); frames "
+                            "are the pinhole render seen through it, labels stay pinhole; write --distortion=-0.1,0,0,0,0 when k1 < 0")
     p.set_defaults(func=cmd_generate)
 
 
@@ -130,7 +133,17 @@ def cmd_generate(args) -> int:
         scenario = with_runway(scenario, Runway(length_m=length, width_m=width, heading_deg=scenario.runway.heading_deg,
                                                 aim_distance_m=scenario.runway.aim_distance_m,
                                                 slope_pct=scenario.runway.slope_pct))
-    options = simulation_options_from_args(args, camera=CameraModel.default(args.size))
+    camera = CameraModel.default(args.size)
+    if getattr(args, "distortion", None):
+        from dataclasses import replace
+        try:
+            coefficients = tuple(float(c) for c in args.distortion.split(","))
+        except ValueError:
+            raise ValueError(f"--distortion must be five numbers k1,k2,p1,p2,k3, got {args.distortion!r}") from None
+        if len(coefficients) != 5:
+            raise ValueError(f"--distortion must be five numbers k1,k2,p1,p2,k3, got {args.distortion!r}")
+        camera = replace(camera, distortion=coefficients)
+    options = simulation_options_from_args(args, camera=camera)
     job = GenerateJob(scenario, options, scene_from_args(args), png_compression=args.png_compression, lard=args.lard)
     report = generate_dataset(job, args.out, workers=args.workers, scheduler=args.scheduler, force=args.force,
                               progress=not args.no_progress)

@@ -259,3 +259,27 @@ def test_variety_and_runway_size_reach_runway_json_labels_and_manifest(tmp_path)
     assert manifest["scene"] == json.loads(json.dumps(dict(drawn.scene.to_dict(), markings="blast_pad")))
     ratio = spans["27.5"][:10] / spans["45"][:10]
     assert np.allclose(ratio, 27.5 / 45.0, rtol=0.01), ratio
+
+
+def test_distortion_option_is_checked_in_one_sentence(tmp_path):
+    with pytest.raises(ValueError, match=r"--distortion must be five numbers k1,k2,p1,p2,k3, got '0.1,x'"):
+        _cli(["generate", "--scenario", "thesis-1", "--out", str(tmp_path / "ds"), "--distortion", "0.1,x"])
+    assert not (tmp_path / "ds").exists()
+
+
+
+@pytest.mark.slow
+def test_distortion_option_reaches_camera_json_and_the_frames(tmp_path):
+    """--distortion: camera.json carries the lens, labels stay pinhole (identical to the run
+    without it), and the frames are not the pinhole ones."""
+    import cv2
+    for name, extra in (("lens", ["--distortion=-0.2,0.03,0,0,0"]), ("pinhole", [])):
+        assert _cli(["generate", "--scenario", "thesis-3", "--out", str(tmp_path / name), "--size", "64", "--fps",
+                     "1", "--no-progress", "--flat"] + extra) == 0
+    camera = json.loads((tmp_path / "lens" / "camera.json").read_text())
+    assert camera["distortion"] == [-0.2, 0.03, 0.0, 0.0, 0.0]
+    assert (tmp_path / "lens" / "labels.csv").read_text() == (tmp_path / "pinhole" / "labels.csv").read_text()
+    last = sorted((tmp_path / "lens" / "frames").glob("*.png"))[-1].name
+    lens = cv2.imread(str(tmp_path / "lens" / "frames" / last))
+    pinhole = cv2.imread(str(tmp_path / "pinhole" / "frames" / last))
+    assert np.abs(lens.astype(int) - pinhole.astype(int)).max() > 100
