@@ -13,9 +13,14 @@ campaign of eight approaches otherwise needs tens of GB of PNGs.
 
 Resumable: run the same command again after an interruption. A scenario whose runs are all
 up to date is skipped; a half-rendered dataset resumes frame by frame; the comparison is
-rebuilt. A campaign folder made with other settings is refused unless ``--force``. With
-``--scheduler``, frames render on the Dask cluster and each scenario's runs are processed
-there as one task (every source in one decoding pass).
+rebuilt. A campaign folder made with other settings is refused unless ``--force``.
+
+With ``--prune-frames`` (frames not kept, as ``visland demo`` by default) a scenario is rendered
+and measured in memory (:mod:`visland.datasets.stream`): no PNG is written or decoded, the
+dataset folder holds the metadata only, and the runs are identical to the file route's. With
+``--scheduler`` such a scenario is one task on the Dask cluster (render, measure, estimate). When
+frames are kept, they are generated as files (on the cluster with ``--scheduler``) and each
+scenario's runs are processed as one task (every source in one decoding pass).
 """
 from __future__ import annotations
 
@@ -118,6 +123,30 @@ def _process_task(dataset: str, run_dirs: dict, observers: tuple) -> str:
     return "\n".join(lines)
 
 
+def _stream_task(job, dataset: str, run_dirs: dict, observers: tuple, workers: int) -> str:
+    """Render one scenario's frames and measure them in memory with every source it still needs
+    (module-level so that Dask can ship it to a worker; see :mod:`visland.datasets.stream`)."""
+    from visland.datasets.process import ProcessOptions
+    from visland.datasets.stream import stream_process
+    lines: list[str] = []
+    stream_process(job, dataset, run_dirs, ProcessOptions(observers=observers, quiet=True), workers=workers,
+                   echo=lines.append)
+    return "\n".join(lines)
+
+
+def _has_frames(dataset: Path) -> bool:
+    """Whether ``dataset`` holds rendered frames (a complete or half-written ``generate``)."""
+    return (dataset / "frames").is_dir() and any((dataset / "frames").iterdir())
+
+
+def _is_streamed(dataset: Path) -> bool:
+    """Whether ``dataset`` holds the metadata of a streamed scenario (a simulation manifest, no frames)."""
+    try:
+        return json.loads((dataset / "manifest.json").read_text()).get("kind") == "simulation"
+    except (OSError, json.JSONDecodeError, AttributeError):
+        return False
+
+
 def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=print) -> dict:
     """Generate every scenario, process it with every source, compare everything."""
     from visland.camera import CameraModel
@@ -173,6 +202,23 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
             sim_options = simulation_options_from_args(_Args, camera=CameraModel.default(options.size))
             job = GenerateJob(scenario=scenario, options=sim_options, scene=scene,
                               png_compression=options.png_compression)
+            if options.prune_frames and not _has_frames(dataset):
+                # frames not kept: render and measure in memory, no PNG round trip
+                echo(f"[{time.perf_counter() - started:6.0f} s] render and measure {scenario.name} in memory "
+                     f"({options.size} px, {options.fps:g} Hz) with {', '.join(todo)}"
+                     + (f" on {options.scheduler}" if client is not None else ""))
+                if client is not None:
+                    text = client.gather(client.submit(_stream_task, job, str(dataset), todo, observers, 1,
+                                                       pure=False))
+                else:
+                    text = _stream_task(job, str(dataset), todo, observers, options.workers)
+                for line in text.splitlines():
+                    if "frames: runway found" in line or "in memory in" in line:
+                        echo("         " + line)
+                continue
+            if _is_streamed(dataset):                     # metadata of an earlier streamed run: generate anew
+                import shutil
+                shutil.rmtree(dataset)
             echo(f"[{time.perf_counter() - started:6.0f} s] generate {scenario.name} ({options.size} px, "
                  f"{options.fps:g} Hz)")
             report = generate_dataset(job, dataset, workers=options.workers, scheduler=options.scheduler, force=False)

@@ -133,18 +133,25 @@ def process_input(input_path, out_dir, options: ProcessOptions | None = None, fo
 def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = None, force: bool = False,
                  echo=print) -> dict:
     """Process ``input_path`` with several measurement sources (``{source: out_dir}``), decoding
-    every frame once; one run folder per source. Returns ``{source: run.json content}``."""
+    every frame once; one run folder per source. Returns ``{source: run.json content}``.
+
+    ``input_path`` is a frame folder, a video, or a :class:`visland.datasets.sources.FrameSource`
+    already open (the frames streamed from the renderer, :mod:`visland.datasets.stream`)."""
     from visland.datasets.measure import measure_many
-    from visland.datasets.sources import open_source
+    from visland.datasets.sources import FrameSource, open_source
     from visland.estimation.command import EstimateOptions
 
     options = options or ProcessOptions()
     started = time.perf_counter()
     for source_kind in out_dirs:
         replace(options, source=source_kind)               # validates the kind
-    _check_paths(input_path, out_dirs, options, force)
-    source = open_source(input_path, camera=options.camera, telemetry=options.telemetry,
-                         frames_csv=options.frames_csv, fps=options.fps, time_offset_s=options.time_offset_s)
+    if isinstance(input_path, FrameSource):
+        source, input_path = input_path, input_path.name
+        _check_paths(input_path, out_dirs, options, force)
+    else:
+        _check_paths(input_path, out_dirs, options, force)
+        source = open_source(input_path, camera=options.camera, telemetry=options.telemetry,
+                             frames_csv=options.frames_csv, fps=options.fps, time_offset_s=options.time_offset_s)
     _align_clocks(source, options, echo)
     if source.truth is None and options.initial_height_m is None:
         raise ValueError(f"{input_path}: no truth.csv, so give the initial height guess with --initial-height M")

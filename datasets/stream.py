@@ -1,0 +1,189 @@
+"""Streaming measurement: render a scenario's frames and measure them in memory, no PNG round trip.
+
+``visland campaign --prune-frames`` and ``visland demo`` (frames not kept) used to render every
+frame to a PNG file, decode it again to measure it, then delete it: at 2048 px the PNG writing
+(0.25-0.33 s per frame) cost four times the rendering (0.05-0.07 s) and ten times the detection.
+Here the frames go straight from the renderer to the measurement, through the very code that
+``visland process`` runs on a folder (:func:`visland.datasets.process.process_many`, which
+decodes each frame once for every source):
+
+- the dataset folder gets every file of ``visland generate`` but the images (``frames.csv``,
+  ``telemetry.csv``, ``truth.csv``, ``labels.csv``, ``camera.json``, ``runway.json`` and the
+  simulation's ``manifest.json``), written first and read back by :class:`RenderedSource`
+  exactly as :class:`visland.datasets.sources.FolderSource` reads them;
+- :class:`RenderedSource` yields the rendered RGB frames in order. A PNG is lossless and a
+  folder's frames are decoded to RGB, so every source sees the same pixels, the same times and
+  the same inertial data as on the file route: measurements and estimates are identical
+  (``tests/datasets/test_stream.py`` checks it frame for frame);
+- frames render ahead of the measurement: in a background thread (one process), in a pool of
+  worker processes (``workers`` > 1, each with its GL context), and the whole scenario is one
+  task on a Dask worker with ``--scheduler`` (see :mod:`visland.datasets.campaign`).
+"""
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from visland.camera import CameraModel
+from visland.contracts import FRAMES_COLUMNS, read_frames_csv, read_labels, read_telemetry, read_truth, write_csv
+from visland.datasets.sources import FrameSource
+from visland.folder import as_grey, interpolate_telemetry
+
+__all__ = ["RenderedSource", "write_dataset_files", "stream_process"]
+
+
+def write_dataset_files(result, folder) -> None:
+    """Every file ``visland generate`` writes into ``folder`` but ``frames/`` (and the simulation's
+    manifest instead of the dataset's, so the folder is not taken for a complete dataset)."""
+    from visland.simulate import write_simulation_files
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_simulation_files(result, folder)
+    write_csv(folder / "frames.csv", {"frame": np.arange(len(result.frames)), "t_s": result.frames.t_s},
+              FRAMES_COLUMNS)
+
+
+def _render_task(task):
+    """Render one frame in a pool worker: ``(index, rgb)`` (module level: spawn pickles it)."""
+    from visland.datasets.generate import _WORKER_LOCK, _renderer_for, frame_seed
+    payload, index, p_runway_m, R_camera_from_runway = task
+    with _WORKER_LOCK:
+        renderer = _renderer_for(payload)
+        rgb = renderer.render(np.asarray(p_runway_m, float), np.asarray(R_camera_from_runway, float),
+                              frame_seed=frame_seed(payload["scene"]["seed"], index))
+    return index, rgb
+
+
+class RenderedSource(FrameSource):
+    """The frames of a generate job rendered on demand, with the metadata of its folder.
+
+    Parameters
+    ----------
+    root : a folder written by :func:`write_dataset_files` for ``result``.
+    job : visland.datasets.generate.GenerateJob
+        What the frames look like (scene, camera size); the same job renders the same pixels as
+        ``visland generate``.
+    result : visland.simulate.SimulationResult
+        The job's simulation (poses of the camera as mounted).
+    workers : int
+        1 renders in a background thread of this process; more renders in that many spawned
+        processes (frames come back in order).
+    prefetch : int
+        Frames rendered ahead of the consumer (each is ``H x W x 3`` bytes: 12.6 MB at 2048 px).
+    """
+
+    def __init__(self, root, job, result, workers: int = 1, prefetch: int = 4):
+        self.root = Path(root)
+        self.name = str(self.root)
+        self._job = job
+        self._result = result
+        self._workers = int(workers)
+        self._prefetch = max(1, int(prefetch))
+        # read back exactly as FrameFolder reads a folder (same files, same parsing)
+        times = read_frames_csv(self.root / "frames.csv")
+        self.times_s = times["t_s"]
+        if len(self.times_s) != len(result.frames):
+            raise ValueError(f"{self.root / 'frames.csv'}: {len(self.times_s)} frames but the job renders "
+                             f"{len(result.frames)}")
+        self.camera = CameraModel.load(self.root / "camera.json")
+        self.telemetry = read_telemetry(self.root / "telemetry.csv")
+        self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(self.root / "telemetry.csv"))
+        self.truth = read_truth(self.root / "truth.csv")
+        self.labels = read_labels(self.root / "labels.csv")
+        runway = self.root / "runway.json"
+        self.runway_json = runway if runway.exists() else None
+        #: seconds spent rendering (summed over the rendering threads or processes' results)
+        self.render_wall_s = 0.0
+
+    def _tasks(self):
+        from visland.datasets.generate import _payload
+        from visland.features import batch_R_camera_from_runway
+        s = self._result.frames
+        camera = self._result.camera_true
+        R_camera_from_runway = batch_R_camera_from_runway(s.roll_rad, s.pitch_rad, s.dpsi_rad, camera.mount_rpy_rad)
+        payload = _payload(self._job, self._result)
+        return [(payload, i, s.p_runway_m[i], R_camera_from_runway[i]) for i in range(len(s))]
+
+    def _rendered(self):
+        """``(index, rgb)`` in order, rendered ahead in a thread or a process pool."""
+        tasks = self._tasks()
+        if self._workers > 1:
+            import multiprocessing
+            context = multiprocessing.get_context("spawn")          # one fresh GL context per process
+            with context.Pool(min(self._workers, len(tasks))) as pool:
+                try:
+                    yield from pool.imap(_render_task, tasks, chunksize=1)
+                finally:
+                    pool.terminate()
+            return
+        frames: queue.Queue = queue.Queue(maxsize=self._prefetch)
+        stop = threading.Event()
+
+        def render_all():
+            # the renderer is made, used and closed in this one thread (its GL context is current here)
+            from visland.datasets.generate import frame_seed
+            from visland.render import FrameRenderer
+            renderer = None
+            try:
+                payload = tasks[0][0]
+                renderer = FrameRenderer(self._job.scene, self._result.camera_true, self._result.scenario.runway)
+                for _, index, p_runway_m, R_camera_from_runway in tasks:
+                    if stop.is_set():
+                        return
+                    rgb = renderer.render(p_runway_m, R_camera_from_runway,
+                                          frame_seed=frame_seed(payload["scene"]["seed"], index))
+                    frames.put((index, rgb))
+                frames.put(None)
+            except BaseException as error:          # handed to the consumer
+                frames.put(error)
+            finally:
+                if renderer is not None:
+                    renderer.close()
+
+        thread = threading.Thread(target=render_all, daemon=True)
+        thread.start()
+        try:
+            while True:
+                item = frames.get()
+                if item is None:
+                    return
+                if isinstance(item, BaseException):
+                    raise item
+                yield item
+        finally:
+            stop.set()
+            while thread.is_alive():              # unblock a renderer waiting on a full queue
+                try:
+                    frames.get(timeout=0.1)
+                except queue.Empty:
+                    pass
+            thread.join()
+
+    def frames(self, gray: bool = True, prefetch: int = 4):
+        """Yield ``(index, image, None)`` in order: RGB (H, W, 3) uint8, or grey levels when ``gray``."""
+        expected = (self.camera.height, self.camera.width)
+        for index, rgb in self._rendered():
+            if rgb.shape[:2] != expected:          # the job's camera and camera.json disagree: a bug, say so
+                raise ValueError(f"frame {index}: rendered {rgb.shape[1]}x{rgb.shape[0]}, camera.json says "
+                                 f"{self.camera.width}x{self.camera.height}")
+            yield index, (as_grey(rgb) if gray else rgb), None
+
+
+def stream_process(job, dataset_dir, run_dirs: dict, options, workers: int = 1, echo=print) -> dict:
+    """Simulate ``job``, write its dataset files (no frames), render and measure every frame in
+    memory with every source of ``run_dirs`` (``{source: run folder}``), estimate and write the
+    runs as ``visland process`` does with ``options`` (:class:`visland.datasets.process.ProcessOptions`).
+    Returns ``{source: run.json content}``."""
+    from visland.datasets.process import process_many
+    from visland.simulate import run_simulation
+    started = time.perf_counter()
+    result = run_simulation(job.scenario, job.options)
+    write_dataset_files(result, dataset_dir)
+    source = RenderedSource(dataset_dir, job, result, workers=workers)
+    runs = process_many(source, run_dirs, options, force=True, echo=echo)
+    echo(f"{len(source)} frames rendered and measured in memory in {time.perf_counter() - started:.0f} s")
+    return runs
