@@ -90,8 +90,59 @@ def _cmd_demo(args) -> int:
     return 0
 
 
+def _cmd_fly(args) -> int:
+    import json
+    from visland.contracts import json_ready
+    from visland.datasets.fly import FlyOptions, fly, monte_carlo
+    from visland.scenarios import resolve_scenario
+    options = FlyOptions(observer=args.observer, measure=args.measure, pixel_noise_px=args.pixel_noise, size=args.size,
+                         truth_guided=args.truth_guided, flare_height_source=args.flare_height_source,
+                         initial_height_m=args.initial_height, seed=args.seed,
+                         calibration_error_deg=(0.0, args.pitch_mount_error, 0.0),
+                         detection_lost_below_ft=args.lose_runway_below, frozen_frames_at_ft=args.freeze_at)
+    if args.monte_carlo:
+        summary = monte_carlo(args.monte_carlo, options, args.out, echo=print)
+        print(json.dumps(json_ready(summary)))
+        return 0
+    result = fly(resolve_scenario(args.scenario), options)
+    print(json.dumps(json_ready(result)))
+    return 0
+
+
 def register(subparsers):
     """Add this stage's commands to the visland parser."""
+    p = subparsers.add_parser(
+        "fly", help="closed loop: the autopilot flies on the vision estimates, flares and lands (one JSON line)",
+        description="Fly a scenario with the ILS laws fed by an observer's estimates (dY, dGS, dpsi) instead of the "
+                    "truth: each frame is measured from the true state (simulated features with pixel noise, or a "
+                    "rendered frame and runway detection), the observer steps at 50 Hz, a flare law and main-gear "
+                    "touchdown end the run, and a monitor decides at 200 and 100 ft to continue or go around. "
+                    "Ends with one JSON line (touchdown_x_m, touchdown_y_m, sink_rate_mps, go_around, "
+                    "go_around_reason, dh_err_100ft_m, wall_s, ...).")
+    p.add_argument("--scenario", default="thesis-3", metavar="NAME|FILE", help="scenario (default thesis-3)")
+    p.add_argument("--observer", default="kf-2p", help="two-point observer that guides (default kf-2p)")
+    p.add_argument("--measure", default="simulated", choices=("simulated", "detection"),
+                   help="simulated: exact features plus --pixel-noise (fast); detection: rendered frames")
+    p.add_argument("--pixel-noise", type=float, default=1.0, metavar="PX", help="corner noise in simulated mode (1)")
+    p.add_argument("--size", type=int, default=2048, metavar="PX", help="image size (default 2048)")
+    p.add_argument("--truth-guided", action="store_true", help="fly the same case on the truth (the baseline)")
+    p.add_argument("--flare-height-source", default="vision", choices=("vision", "radio"),
+                   help="height the flare law reads: the vision estimate, or a radio altimeter below 50 ft")
+    p.add_argument("--initial-height", type=float, default=None, metavar="M",
+                   help="the observers' initial height guess (default: the true height + 20 %%)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the pixel noise and the scene")
+    p.add_argument("--pitch-mount-error", type=float, default=0.0, metavar="DEG",
+                   help="fault: camera pitch mounting error the estimator does not know")
+    p.add_argument("--lose-runway-below", type=float, default=None, metavar="FT",
+                   help="fault: the runway is not found below this height (fog bank)")
+    p.add_argument("--freeze-at", type=float, default=None, metavar="FT",
+                   help="fault: the frame stream repeats one frame for 1 s from this height")
+    p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
+                   help="fly N cases (thesis-1..8 and ecc-1..3 in turn, crosswind 0-15 kt, gusts, noise seeds), "
+                        "each on the estimates and on the truth; writes --out DIR/landings.csv and a plot")
+    p.add_argument("--out", default="visland-fly", metavar="DIR", help="output folder of --monte-carlo")
+    p.set_defaults(func=_cmd_fly)
+
     p = subparsers.add_parser(
         "process", help="frames (folder or video) + telemetry -> measurements, estimates, metrics, report",
         description="Process a frame folder (SPEC contract) or a video: measure the runway in every frame "

@@ -46,7 +46,8 @@ from visland.frames import R_ned_from_runway
 from visland.runway import GLIDE_SLOPE_RAD
 from visland.scenarios import Scenario, Wind
 
-__all__ = ["AircraftParams", "GuidanceParams", "Trajectory", "FrameStates", "simulate_flight",
+__all__ = ["AircraftParams", "GuidanceParams", "Trajectory", "FrameStates", "simulate_flight", "FlareParams",
+           "FlightModel", "AircraftState",
            "FLIGHT_LIMITS", "G_MPS2"]
 
 G_MPS2 = 9.80665
@@ -488,3 +489,227 @@ def _stack_rz(a):
     c, s = np.cos(a), np.sin(a)
     z, o = np.zeros_like(a), np.ones_like(a)
     return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
+
+
+# --------------------------------------------------------------------------- closed loop: flare and touchdown
+@dataclass(frozen=True)
+class FlareParams:
+    """Flare law and main gear (``visland fly``).
+
+    Flare (an exponential flare, the classic autoland law): below ``flare_height_m`` of main-gear
+    height ``h`` the vertical speed order is ``h'_c = -s_td - (h / h_f) (V tan(gs) - s_td)``, so it
+    starts at the glide-path sink rate and tends to ``s_td`` on the ground (the height decays with
+    the time constant ``tau = h_f / (V tan(gs) - s_td)`` towards ``-s_td tau``, which the gear
+    meets at the sink rate ``s_td``). The order is flown as a load factor on the vertical speed
+    error, ``nz_c = cos(gamma)/cos(mu) + k_hdot (h'_c - h') / g`` (the glide-path law's flight-path
+    loop, 0.3 /s, is too slow for a flare of three seconds). The lateral law stays the localizer's
+    (no decrab, no rollout).
+
+    Main gear: ``gear_body_m`` from the centre of gravity in body axes (x forward, z down); the
+    aircraft touches down when the gear reaches the runway surface.
+    """
+
+    flare_height_m: float = 15.0
+    touchdown_sink_mps: float = 0.6
+    k_hdot_per_s: float = 1.0
+    gear_body_m: tuple = (-2.0, 0.0, 3.0)
+    go_around_gamma_deg: float = 4.0
+
+    def __post_init__(self):
+        for name in ("flare_height_m", "touchdown_sink_mps", "k_hdot_per_s", "go_around_gamma_deg"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"flare {name} must be positive, got {value!r}")
+        if len(self.gear_body_m) != 3 or not all(math.isfinite(v) for v in self.gear_body_m):
+            raise ValueError(f"flare gear_body_m must be three finite numbers, got {self.gear_body_m!r}")
+
+    def hdot_order_mps(self, gear_height_m: float, ground_speed_mps: float, tan_gs: float) -> float:
+        """Vertical speed order (m/s, up positive) at main-gear height ``gear_height_m``."""
+        glide_sink = ground_speed_mps * tan_gs
+        h = max(gear_height_m, 0.0)
+        return -self.touchdown_sink_mps - (h / self.flare_height_m) * max(glide_sink - self.touchdown_sink_mps, 0.0)
+
+
+@dataclass
+class AircraftState:
+    """What the aircraft is doing now (truth, SI): the camera sits at the centre of gravity."""
+
+    t_s: float
+    p_runway_m: np.ndarray
+    v_runway_mps: np.ndarray
+    v_ned_mps: np.ndarray
+    roll_rad: float
+    pitch_rad: float
+    heading_rad: float
+    dpsi_rad: float
+    omega_body_rps: np.ndarray
+    gamma_rad: float
+    mu_rad: float
+    nz_g: float
+
+    def frame_states(self) -> FrameStates:
+        """This state as a one-frame :class:`FrameStates` (for feature projection and rendering)."""
+        return FrameStates(t_s=np.array([self.t_s]), p_runway_m=self.p_runway_m[None, :].copy(),
+                           v_ned_mps=self.v_ned_mps[None, :].copy(), v_runway_mps=self.v_runway_mps[None, :].copy(),
+                           roll_rad=np.array([self.roll_rad]), pitch_rad=np.array([self.pitch_rad]),
+                           heading_rad=np.array([self.heading_rad]), dpsi_rad=np.array([self.dpsi_rad]),
+                           omega_body_rps=self.omega_body_rps[None, :].copy())
+
+
+class FlightModel:
+    """The aircraft of :func:`simulate_flight`, stepped one 1/rate_hz at a time with orders held
+    over the step (a digital autopilot), so a closed loop can choose the orders from estimates.
+
+    ``guidance_orders(p_runway_m, v_runway_mps)`` gives the ILS laws' orders for a perceived
+    position and velocity; ``flare_orders(...)`` and ``go_around_orders()`` the flare's and a
+    go-around's; ``step(bank_cmd_rad, nz_cmd_g)`` integrates (RK4) and reports a main-gear
+    touchdown inside the step (``touchdown``: time, gear position in R, sink rate).
+    """
+
+    def __init__(self, scenario: Scenario, aircraft: AircraftParams | None = None,
+                 guidance: GuidanceParams | None = None, flare: FlareParams | None = None, rate_hz: float = 50.0):
+        self.scenario = scenario
+        self.aircraft = aircraft or AircraftParams()
+        self.guidance_params = guidance or GuidanceParams()
+        self.flare = flare or FlareParams()
+        self.dt = 1.0 / rate_hz
+        self.V = scenario.airspeed_mps
+        self.guide = _Guidance(self.guidance_params, scenario, self.V)
+        self.R_ned_from_rwy = R_ned_from_runway(scenario.runway.heading_rad)
+        self.R_rwy_from_ned = self.R_ned_from_rwy.T
+        p0_runway = np.array([scenario.runway.aim_distance_m + scenario.dx_m, scenario.dy_m,
+                              -scenario.initial_height_m])
+        p0 = self.R_ned_from_rwy @ p0_runway
+        gamma0 = math.radians(scenario.gamma_deg)
+        mu0 = math.radians(scenario.roll_deg)
+        self.state = np.array([p0[0], p0[1], p0[2], gamma0, scenario.runway.heading_rad + math.radians(scenario.dpsi_deg),
+                               mu0, math.cos(gamma0) / math.cos(mu0), 0.0])
+        self.t_s = 0.0
+        self.crosswind_t0 = 0.0 if scenario.wind.crosswind_onset_m is None else None
+        self.gust_t0 = None
+        self.touchdown = None
+        self._last_rates = (0.0, 0.0, 0.0, 0.0)
+        self._orders = (mu0, self.state[6])
+
+    # ---- kinematics
+    def _wind_ned(self, t):
+        w = _wind_runway_mps(self.scenario.wind, t, self.crosswind_t0, self.gust_t0)
+        return self.R_ned_from_rwy @ np.array(w)
+
+    def _derivative(self, t, s, bank_cmd, nz_cmd):
+        a = self.aircraft
+        _, _, _, gamma, chi, mu, nz, nzdot = s
+        V = self.V
+        wn, we, wd = self._wind_ned(t)
+        cg = math.cos(gamma)
+        vn = V * cg * math.cos(chi) + wn
+        ve = V * cg * math.sin(chi) + we
+        vd = -V * math.sin(gamma) + wd
+        w = a.nz_omega_rad_s
+        roll_rate_max = math.radians(a.roll_rate_limit_dps)
+        gamma_dot = G_MPS2 / V * (nz * math.cos(mu) - cg)
+        chi_dot = G_MPS2 * nz * math.sin(mu) / (V * cg)
+        mu_dot = max(-roll_rate_max, min(roll_rate_max, (bank_cmd - mu) / a.roll_time_constant_s))
+        nz_ddot = w * w * (nz_cmd - nz) - 2.0 * a.nz_damping * w * nzdot
+        return np.array([vn, ve, vd, gamma_dot, chi_dot, mu_dot, nzdot, nz_ddot])
+
+    def _gear_height_m(self, s):
+        """Main-gear height above the runway surface (slope included) for state ``s``."""
+        p_rwy = self.R_rwy_from_ned @ s[:3]
+        R_nb = _R_ned_from_body(s[4], s[3], s[5], self._alpha(s[6]))
+        gear_rwy = p_rwy + self.R_rwy_from_ned @ (R_nb @ np.asarray(self.flare.gear_body_m, float))
+        surface_z = -gear_rwy[0] * self.scenario.runway.slope_pct / 100.0
+        return float(surface_z - gear_rwy[2]), gear_rwy
+
+    def _alpha(self, nz):
+        a = self.aircraft
+        alpha0 = math.radians(a.alpha_zero_lift_deg)
+        return alpha0 + (math.radians(a.alpha_1g_deg) - alpha0) * nz
+
+    def gear_height_m(self) -> float:
+        return self._gear_height_m(self.state)[0]
+
+    def current(self) -> AircraftState:
+        """The state now, with the attitude, rates and velocities the inertial unit measures."""
+        s = self.state
+        gamma, chi, mu, nz, nzdot = s[3], s[4], s[5], s[6], s[7]
+        alpha = self._alpha(nz)
+        R_nb = _R_ned_from_body(chi, gamma, mu, alpha)
+        pitch = -math.asin(max(-1.0, min(1.0, R_nb[2, 0])))
+        roll = math.atan2(R_nb[2, 1], R_nb[2, 2])
+        heading = math.atan2(R_nb[1, 0], R_nb[0, 0])
+        d = self._derivative(self.t_s, s, *self._orders)
+        gamma_dot, chi_dot, mu_dot = d[3], d[4], d[5]
+        a = self.aircraft
+        alpha_dot = (math.radians(a.alpha_1g_deg) - math.radians(a.alpha_zero_lift_deg)) * nzdot
+        p_w = mu_dot - chi_dot * math.sin(gamma)
+        q_w = gamma_dot * math.cos(mu) + chi_dot * math.cos(gamma) * math.sin(mu)
+        r_w = -gamma_dot * math.sin(mu) + chi_dot * math.cos(gamma) * math.cos(mu)
+        ca, sa = math.cos(alpha), math.sin(alpha)
+        omega = np.array([ca * p_w - sa * r_w, q_w + alpha_dot, sa * p_w + ca * r_w])
+        v_ned = d[:3]
+        dpsi = (heading - self.scenario.runway.heading_rad + math.pi) % (2 * math.pi) - math.pi
+        return AircraftState(t_s=self.t_s, p_runway_m=self.R_rwy_from_ned @ s[:3], v_runway_mps=self.R_rwy_from_ned @ v_ned,
+                             v_ned_mps=v_ned, roll_rad=roll, pitch_rad=pitch, heading_rad=heading, dpsi_rad=dpsi,
+                             omega_body_rps=omega, gamma_rad=gamma, mu_rad=mu, nz_g=nz)
+
+    # ---- orders
+    def guidance_orders(self, p_runway_m, v_runway_mps):
+        """Bank and load-factor orders of the ILS laws for a perceived position and velocity."""
+        self.guide.update_mode(p_runway_m, v_runway_mps)
+        return self.guide.orders(p_runway_m, v_runway_mps, self.state[3], self.state[5])
+
+    def _vertical_orders(self, hdot_cmd):
+        g = self.guide
+        gamma, mu = self.state[3], self.state[5]
+        gamma_cmd = math.asin(max(-0.5, min(0.5, hdot_cmd / self.V)))
+        gamma_cmd = max(g.gamma_min, min(g.gamma_max, gamma_cmd))
+        nz_cmd = math.cos(gamma) / math.cos(mu) + self.V / G_MPS2 * g.p.k_gamma_per_s * (gamma_cmd - gamma)
+        return max(g.p.nz_min_g, min(g.p.nz_max_g, nz_cmd))
+
+    def flare_orders(self, bank_cmd_rad, gear_height_m, ground_speed_mps, hdot_mps):
+        """The flare: the localizer's bank order kept, the load factor from the flare law
+        (``hdot_mps`` the vertical speed, up positive, as the inertial unit measures it)."""
+        g = self.guide
+        hdot_cmd = self.flare.hdot_order_mps(gear_height_m, ground_speed_mps, g.tan_gs)
+        gamma, mu = self.state[3], self.state[5]
+        nz_cmd = math.cos(gamma) / math.cos(mu) + self.flare.k_hdot_per_s * (hdot_cmd - hdot_mps) / G_MPS2
+        return bank_cmd_rad, max(g.p.nz_min_g, min(g.p.nz_max_g, nz_cmd))
+
+    def go_around_orders(self):
+        """Wings level, climb at ``go_around_gamma_deg``."""
+        return 0.0, self._vertical_orders(self.V * math.sin(math.radians(self.flare.go_around_gamma_deg)))
+
+    # ---- integration
+    def step(self, bank_cmd_rad: float, nz_cmd_g: float) -> None:
+        """Integrate one step with the orders held; sets ``touchdown`` when the gear meets the runway."""
+        s, t, dt = self.state, self.t_s, self.dt
+        x_r = (self.R_rwy_from_ned @ s[:3])[0]
+        wind = self.scenario.wind
+        if wind.crosswind_onset_m is not None and self.crosswind_t0 is None and -x_r <= wind.crosswind_onset_m:
+            self.crosswind_t0 = t
+        if wind.gust and self.gust_t0 is None and -x_r <= wind.gust_onset_m:
+            self.gust_t0 = t
+        self._orders = (bank_cmd_rad, nz_cmd_g)
+        h_before, _ = self._gear_height_m(s)
+        f = self._derivative
+        k1 = f(t, s, bank_cmd_rad, nz_cmd_g)
+        k2 = f(t + dt / 2, s + dt / 2 * k1, bank_cmd_rad, nz_cmd_g)
+        k3 = f(t + dt / 2, s + dt / 2 * k2, bank_cmd_rad, nz_cmd_g)
+        k4 = f(t + dt, s + dt * k3, bank_cmd_rad, nz_cmd_g)
+        new = s + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        h_after, gear_after = self._gear_height_m(new)
+        if self.touchdown is None and h_after <= 0.0 < h_before:
+            fraction = h_before / (h_before - h_after)
+            _, gear_before = self._gear_height_m(s)
+            gear = gear_before + fraction * (gear_after - gear_before)
+            self.touchdown = {"t_s": t + fraction * dt, "gear_runway_m": gear,
+                              "sink_rate_mps": (h_before - h_after) / dt}
+        self.state = new
+        self.t_s = t + dt
+
+
+def _R_ned_from_body(chi, gamma, mu, alpha) -> np.ndarray:
+    """``Rz(chi) Ry(gamma) Rx(mu) Ry(alpha)`` for one sample (module docstring)."""
+    a = np.array([chi, gamma, mu, alpha], dtype=float)
+    return (_stack_rz(a[0:1]) @ _stack_ry(a[1:2]) @ _stack_rx(a[2:3]) @ _stack_ry(a[3:4]))[0]

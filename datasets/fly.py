@@ -1,0 +1,551 @@
+"""``visland fly``: the autopilot flies on the vision estimates (closed loop), flares and lands.
+
+At every step of the flight model (50 Hz; a camera frame every other step at 25 Hz):
+
+1. the camera sees the runway from the *true* state: either a rendered frame measured by
+   runway detection (``--measure detection``), or, fast, the exact image features
+   (:func:`visland.features.ideal_features`) with white pixel noise on the corners
+   (``--measure simulated``, the thesis's "analyse d'images simulée", 5.1.2);
+2. the inputs are prepared as :func:`visland.estimation.inputs.prepare_inputs` prepares them,
+   causally, one step at a time (:class:`StepInputs`: d_F -> dpsi, the runway heading as the
+   weighted running mean of ``heading - dpsi``, velocities in runway axes, virtual coordinates);
+3. the chosen observer (a two-point observer: the glide path needs dX) steps, and its
+   dX, dY, dH and the heading deviation give the perceived position and ground velocity that the
+   ILS laws of :mod:`visland.flight` (the same laws as ``visland simulate``) turn into orders;
+   ``--truth-guided`` gives the laws the true state instead (the baseline);
+4. below the flare height (main gear, :class:`visland.flight.FlareParams`) the flare law takes
+   over, its height from the vision estimate or from a simulated radio altimeter (true height
+   plus white noise, valid below 50 ft) (``--flare-height-source``);
+5. a monitor decides at 200 ft and at 100 ft (true height: the radio altimeter's call-outs)
+   whether to continue: the detection's success and confidence over the last second, the
+   observer's coasting, and the disagreement between the point observer and a line observer
+   (``ekf-2l``) on dH and dY. A go-around is flown (wings level, climb) and counted.
+
+The run ends at main-gear touchdown (or a few seconds into a go-around) with one JSON line.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from visland.flight import FT_TO_M, FlareParams, FlightModel
+
+__all__ = ["FlyOptions", "fly", "MonitorParams", "StepInputs"]
+
+MEASURE_MODES = ("simulated", "detection")
+HEIGHT_SOURCES = ("vision", "radio")
+RADIO_ALTIMETER_MAX_M = 50 * FT_TO_M
+
+
+@dataclass(frozen=True)
+class MonitorParams:
+    """Continue-or-go-around rule at the decision heights (see the module docstring)."""
+
+    decision_heights_ft: tuple = (200.0, 100.0)
+    window_s: float = 1.0                 # how far back detection is judged
+    min_found_fraction: float = 0.8       # of the frames in the window
+    min_confidence: float = 0.5           # median confidence of the found frames in the window
+    max_dh_disagreement_m: float = 3.0    # |dH points - dH lines|, or 5 % of dH if larger
+    max_dy_disagreement_m: float = 3.0    # |dY points - dY lines|
+    max_coast_s: float = 0.5              # the guidance observer's time since its last correction
+
+
+@dataclass(frozen=True)
+class FlyOptions:
+    """What ``visland fly`` flies (see its --help)."""
+
+    observer: str = "kf-2p"
+    monitor_observer: str = "ekf-2l"
+    measure: str = "simulated"
+    pixel_noise_px: float = 1.0
+    size: int = 2048
+    truth_guided: bool = False
+    flare_height_source: str = "vision"
+    radio_noise_m: float = 0.1
+    initial_height_m: float | None = None
+    initial_error: float = 0.2
+    seed: int = 0
+    fps: float = 25.0
+    calibration_error_deg: tuple = (0.0, 0.0, 0.0)
+    detection_lost_below_ft: float | None = None     # fault: the detector loses the runway below this height
+    frozen_frames_at_ft: float | None = None         # fault: the frame stream freezes for 1 s at this height
+    monitor: MonitorParams = field(default_factory=MonitorParams)
+    flare: FlareParams = field(default_factory=FlareParams)
+
+    def __post_init__(self):
+        from visland.estimation.registry import observer_features
+        if observer_features(self.observer) != "points":
+            raise ValueError(f"--observer {self.observer}: fly needs dX for the glide path, which lines do not "
+                             "observe; choose a two-point observer (e.g. kf-2p, ccpi-hg-2p)")
+        if observer_features(self.monitor_observer) != "lines":
+            raise ValueError(f"--monitor-observer {self.monitor_observer}: the monitor compares the point observer "
+                             "with a line observer (e.g. ekf-2l)")
+        if self.measure not in MEASURE_MODES:
+            raise ValueError(f"--measure must be one of {', '.join(MEASURE_MODES)}, got {self.measure!r}")
+        if self.flare_height_source not in HEIGHT_SOURCES:
+            raise ValueError(f"--flare-height-source must be one of {', '.join(HEIGHT_SOURCES)}, "
+                             f"got {self.flare_height_source!r}")
+        if not (math.isfinite(self.pixel_noise_px) and self.pixel_noise_px >= 0):
+            raise ValueError(f"--pixel-noise must be a non-negative number, got {self.pixel_noise_px!r}")
+        if not (math.isfinite(self.fps) and 1.0 <= self.fps <= 50.0 and abs(50.0 / self.fps - round(50.0 / self.fps)) < 1e-9):
+            raise ValueError(f"--fps must divide the 50 Hz flight rate (50, 25, 12.5, 10, ...), got {self.fps!r}")
+        if self.initial_height_m is not None and not (math.isfinite(self.initial_height_m) and self.initial_height_m > 0):
+            raise ValueError(f"--initial-height must be a positive number of metres, got {self.initial_height_m!r}")
+
+
+class _Row(dict):
+    """A one-row measurement table for :meth:`FeatureSeries.from_table`."""
+
+    @property
+    def n_rows(self):
+        return 1
+
+
+class StepInputs:
+    """Causal, step-by-step version of :func:`visland.estimation.inputs.prepare_inputs` (without
+    the mounting's self-calibration): the same quantities from the same helpers."""
+
+    def __init__(self, camera):
+        self.camera = camera
+        self._sums = np.zeros(7)
+        self._first = None
+        self._settled = False
+        self.psi_runway_rad = math.nan
+        self._last_weight = 1.0
+
+    def frame(self, row: dict, roll_rad: float, pitch_rad: float, heading_rad: float):
+        """Take one frame's measurement row (labels schema + found); return its FeatureSeries."""
+        from visland.estimation.inputs import HEADING_SETTLED_RAD, FeatureSeries, _dF_with_corner_fallback
+        from visland.features import dpsi_from_dF
+        table = _Row({k: np.array([v]) for k, v in row.items()})
+        features = FeatureSeries.from_table(table)
+
+        class _Ins:
+            pass
+        ins = _Ins()
+        ins.roll_rad, ins.pitch_rad = np.array([roll_rad]), np.array([pitch_rad])
+        dF = _dF_with_corner_fallback(features, ins, self.camera)[0]
+        dpsi = float(dpsi_from_dF(np.array([dF]), ins.roll_rad, ins.pitch_rad, self.camera)[0]) if np.isfinite(dF) \
+            else math.nan
+        near = features.near_uv_px[0]
+        span = math.hypot(near[1, 0] - near[0, 0], near[1, 1] - near[0, 1])
+        if math.isfinite(span) and span > 0:
+            self._last_weight = span * span
+        # the runway heading: the weighted circular running mean of heading - dpsi and its standard
+        # error, as estimation.inputs._circular_running_mean / _running_standard_error, kept as sums
+        sample = heading_rad - dpsi
+        if math.isfinite(sample):
+            w = self._last_weight
+            if self._first is None:
+                self._first = sample
+            x = (sample - self._first + math.pi) % (2 * math.pi) - math.pi
+            self._sums += np.array([w * math.cos(sample), w * math.sin(sample), w, w * x, w * x * x, w * w, 1.0])
+        c, s_, sw, swx, swxx, sww, n = self._sums
+        if n >= 2:
+            mean = swx / sw
+            se = math.sqrt(max(swxx / sw - mean * mean, 0.0) / (sw * sw / sww))
+            if se <= HEADING_SETTLED_RAD:
+                self._settled = True
+        if self._settled:
+            self.psi_runway_rad = math.atan2(s_, c)
+        return features
+
+    def step(self, t_s, roll_rad, pitch_rad, heading_rad, omega_body_rps, v_ned_mps, features=None):
+        """One :class:`ObserverInput` (None before the runway heading is known)."""
+        from visland.estimation.base import ObserverInput
+        from visland.features import batch_R_camera_from_runway, virtual_from_pixels
+        from visland.frames import wrap_pi
+        psi = self.psi_runway_rad
+        if not math.isfinite(psi):
+            return None
+        dpsi = float(wrap_pi(heading_rad - psi))
+        R_cr = batch_R_camera_from_runway(np.array([roll_rad]), np.array([pitch_rad]), np.array([dpsi]),
+                                          self.camera.mount_rpy_rad)[0]
+        R_rc = R_cr.T
+        c, s = math.cos(psi), math.sin(psi)
+        vn, ve, vd = v_ned_mps
+        v_runway = np.array([c * vn + s * ve, -s * vn + c * ve, vd])
+        points = lines = center = None
+        if features is not None:
+            if features.points_ok[0]:
+                points = virtual_from_pixels(features.near_uv_px[:1], R_rc[None], self.camera)[0]
+            if features.lines_ok[0]:
+                lines = features.lines[0].copy()
+                if np.isfinite(features.center_line[0]).all():
+                    center = features.center_line[0].copy()
+        return ObserverInput(t_s=float(t_s), v_runway_mps=v_runway, v_camera_mps=R_cr @ v_runway,
+                             omega_camera_rps=np.asarray(omega_body_rps) @ self.camera.R_body_from_camera,
+                             n_camera=R_cr[:, 2], R_runway_from_camera=R_rc, points_yv=points, lines=lines,
+                             center_line=center, dpsi_rad=dpsi, roll_rad=float(roll_rad), pitch_rad=float(pitch_rad))
+
+
+class _Tracked:
+    """An observer run step by step, with its latest deviations."""
+
+    def __init__(self, name, aim_m):
+        from visland.estimation.registry import make_observer
+        self.observer = make_observer(name)
+        self.aim_m = aim_m
+        self.started = False
+        self.last_correction_s = math.nan
+        self.dx_m = self.dy_m = self.dh_m = math.nan
+        self._last_yv = None
+
+    def step(self, inp, dh0_m):
+        from visland.estimation.deviations import deviations_from_lines, deviations_from_points
+        obs = self.observer
+        has = inp.points_yv is not None if obs.features == "points" else inp.lines is not None
+        if not self.started:
+            if not has:
+                return
+            obs.reset(inp, dh0_m)
+            self.started = True
+            self.dh_m = dh0_m
+            self.last_correction_s = inp.t_s
+        else:
+            estimate = obs.step(inp)
+            self.dh_m = estimate.dh_m
+            if not estimate.coasting:
+                self.last_correction_s = inp.t_s
+        if obs.features == "points":
+            # as visland.estimation.runner: the observer's own corners unless it says they lag the measured ones
+            if inp.points_yv is not None:
+                self._last_yv = inp.points_yv
+            # (an observer whose own corners lag is read on the last measured ones between frames too)
+            own = hasattr(obs, "predicted_points_yv") and getattr(obs, "deviations_from_own_points", True)
+            yv = obs.predicted_points_yv() if own else self._last_yv
+            if yv is None or not (np.isfinite(yv).all() and np.abs(yv).max() < 1e4):
+                yv = self._last_yv
+            if yv is not None:
+                d = deviations_from_points(yv, self.dh_m, self.aim_m)
+                self.dx_m, self.dy_m = d.dx_m, d.dy_m
+        elif inp.lines is not None:
+            d = deviations_from_lines(inp.lines, inp.R_runway_from_camera, self.dh_m)
+            self.dy_m = d.dy_m
+
+
+def _measure_simulated(state, runway, camera, camera_true, noise_px, rng):
+    from visland.features import ideal_features
+    features = ideal_features(state.frame_states(), runway, camera, camera_true=camera_true,
+                              pixel_noise_px=noise_px, rng=rng)
+    cols = features.as_columns()
+    row = {k: float(np.asarray(v)[0]) for k, v in cols.items()}
+    row.update(found=1.0, confidence=1.0)
+    return row
+
+
+def _measurement_row_from_detection(result, t_s):
+    from visland.contracts import LABEL_COLUMNS
+    values = result.to_measurement_row() if result.found else {}
+    row = {c: math.nan for c in LABEL_COLUMNS if c not in ("frame",)}
+    row.update({k: v for k, v in values.items() if k in row})
+    row.update(t_s=t_s, found=1.0 if result.found else 0.0, confidence=float(result.confidence))
+    return row
+
+
+def _empty_row(t_s, why=""):
+    from visland.contracts import LABEL_COLUMNS
+    row = {c: math.nan for c in LABEL_COLUMNS if c not in ("frame",)}
+    row.update(t_s=t_s, found=0.0, confidence=0.0)
+    return row
+
+
+def fly(scenario, options: FlyOptions, echo=None) -> dict:
+    """Fly ``scenario`` closed loop (module docstring); return the figures of the JSON line."""
+    from visland.camera import CameraModel
+    from visland.sensors import camera_with_calibration_error
+    from visland.features import batch_R_camera_from_runway
+    wall0 = time.perf_counter()
+    rng = np.random.default_rng(options.seed)
+    model = FlightModel(scenario, flare=options.flare)
+    runway = scenario.runway
+    aim = runway.aim_distance_m
+    camera = CameraModel.default(options.size)
+    camera_true = (camera_with_calibration_error(camera, options.calibration_error_deg)
+                   if np.any(options.calibration_error_deg) else camera)
+    steps_per_frame = int(round(50.0 / options.fps))
+    prep = StepInputs(camera)
+    guide_obs = _Tracked(options.observer, aim)
+    monitor_obs = _Tracked(options.monitor_observer, aim)
+    dh0 = options.initial_height_m or (1.0 + options.initial_error) * scenario.initial_height_m
+    renderer = detector = None
+    if options.measure == "detection":
+        from visland.detection import DetectionSequence
+        from visland.render import FrameRenderer
+        from visland.render.params import SceneParams
+        renderer = FrameRenderer(SceneParams(seed=options.seed), camera_true, runway)
+        detector = DetectionSequence(camera, None)
+    frames_log = []           # (t, found, confidence)
+    decisions = []
+    go_around = False
+    go_around_reason = ""
+    go_around_t = None
+    flaring = False
+    dh_err_100 = math.nan
+    deviations_at = {}
+    heights_pending = sorted(options.monitor.decision_heights_ft, reverse=True)
+    log_heights = [400.0, 200.0, 100.0, 50.0]
+    measure_s = estimate_s = 0.0
+    frozen_image = None
+    frozen_until = None
+    k = 0
+    max_steps = int(400 * 50)
+    while k < max_steps:
+        state = model.current()
+        h_true = -state.p_runway_m[2]
+        t = state.t_s
+        features = None
+        if k % steps_per_frame == 0:
+            tic = time.perf_counter()
+            lost = (options.detection_lost_below_ft is not None and h_true < options.detection_lost_below_ft * FT_TO_M)
+            if options.frozen_frames_at_ft is not None and frozen_until is None \
+                    and h_true < options.frozen_frames_at_ft * FT_TO_M:
+                frozen_until = t + 1.0
+            frozen = frozen_until is not None and t < frozen_until
+            if lost:
+                row = _empty_row(t)
+            elif options.measure == "simulated":
+                if frozen and frozen_image is not None:
+                    row = dict(frozen_image, t_s=t)
+                else:
+                    row = _measure_simulated(state, runway, camera, camera_true, options.pixel_noise_px, rng)
+                    frozen_image = row
+            else:
+                if frozen and frozen_image is not None:
+                    image = frozen_image
+                else:
+                    R_cr = batch_R_camera_from_runway(np.array([state.roll_rad]), np.array([state.pitch_rad]),
+                                                      np.array([state.dpsi_rad]), camera_true.mount_rpy_rad)[0]
+                    image = renderer.render(state.p_runway_m, R_cr, frame_seed=k)
+                    frozen_image = image
+                result = detector(image, state.roll_rad, state.pitch_rad, t)
+                row = _measurement_row_from_detection(result, t)
+            measure_s += time.perf_counter() - tic
+            frames_log.append((t, row["found"] > 0.5, row["confidence"]))
+            features = prep.frame(row, state.roll_rad, state.pitch_rad, state.heading_rad)
+        tic = time.perf_counter()
+        inp = prep.step(t, state.roll_rad, state.pitch_rad, state.heading_rad, state.omega_body_rps,
+                        state.v_ned_mps, features)
+        if inp is not None:
+            guide_obs.step(inp, dh0)
+            monitor_obs.step(inp, dh0)
+        estimate_s += time.perf_counter() - tic
+
+        # ---- what the guidance believes
+        if options.truth_guided:
+            p_seen, v_seen = state.p_runway_m, state.v_runway_mps
+            dh_seen = h_true
+        elif inp is not None and guide_obs.started and math.isfinite(guide_obs.dx_m):
+            dh_seen = guide_obs.dh_m
+            p_seen = np.array([guide_obs.dx_m + aim, guide_obs.dy_m, -dh_seen])
+            v_seen = inp.v_runway_mps
+        else:
+            p_seen = v_seen = None
+            dh_seen = math.nan
+        for h_ft in list(log_heights):
+            if h_true <= h_ft * FT_TO_M:
+                log_heights.remove(h_ft)
+                deviations_at[f"{h_ft:g}ft"] = {
+                    "dy_m": float(state.p_runway_m[1]),
+                    "dgs_m": float(h_true + (state.p_runway_m[0] - aim) * model.guide.tan_gs),
+                    "dh_err_m": float(h_true - dh_seen) if math.isfinite(dh_seen) else None}
+                if h_ft == 100.0 and math.isfinite(dh_seen):
+                    dh_err_100 = float(h_true - dh_seen)
+
+        # ---- monitor at the decision heights
+        if not go_around and heights_pending and h_true <= heights_pending[0] * FT_TO_M:
+            h_ft = heights_pending.pop(0)
+            ok, why = _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true)
+            decisions.append({"height_ft": h_ft, "t_s": round(t, 3), "continue": ok, "reason": why,
+                              "dh_true_m": round(h_true, 3), "dy_true_m": round(float(state.p_runway_m[1]), 3),
+                              "dh_points_m": _r(guide_obs.dh_m), "dy_points_m": _r(guide_obs.dy_m),
+                              "dh_lines_m": _r(monitor_obs.dh_m), "dy_lines_m": _r(monitor_obs.dy_m)})
+            if not ok:
+                go_around, go_around_reason, go_around_t = True, f"{h_ft:g} ft: {why}", t
+
+        # ---- orders
+        gear_h = model.gear_height_m()
+        if go_around:
+            orders = model.go_around_orders()
+        elif p_seen is None:
+            orders = (0.0, model._vertical_orders(0.0))      # no estimate yet: wings level, level flight
+        else:
+            bank, nz = model.guidance_orders(p_seen, v_seen)
+            flare_h = _flare_height(options, dh_seen, gear_h, h_true, model, rng)
+            if flaring or flare_h <= options.flare.flare_height_m:
+                flaring = True
+                bank, nz = model.flare_orders(bank, flare_h, math.hypot(*v_seen[:2]), -float(state.v_ned_mps[2]))
+            orders = (bank, nz)
+        model.step(*orders)
+        k += 1
+        if model.touchdown is not None:
+            break
+        if go_around and t - go_around_t > 10.0:
+            break
+        if h_true < 0.5:
+            break
+    wall = time.perf_counter() - wall0
+    td = model.touchdown
+    gear = td["gear_runway_m"] if td else None
+    out = {
+        "scenario": scenario.name, "observer": options.observer, "measure": options.measure,
+        "truth_guided": options.truth_guided, "flare_height_source": options.flare_height_source,
+        "touchdown_x_m": float(gear[0]) if gear is not None else None,
+        "touchdown_y_m": float(gear[1]) if gear is not None else None,
+        "sink_rate_mps": float(td["sink_rate_mps"]) if td else None,
+        "touchdown_t_s": float(td["t_s"]) if td else None,
+        "go_around": go_around, "go_around_reason": go_around_reason,
+        "dh_err_100ft_m": dh_err_100 if math.isfinite(dh_err_100) else None,
+        "decisions": decisions, "deviations": deviations_at,
+        "in_window": bool(gear is not None and 60.0 <= gear[0] <= 823.0 and abs(gear[1]) <= runway.width_m / 2),
+        "frames": len(frames_log), "measure_s": round(measure_s, 3), "estimate_s": round(estimate_s, 3),
+        "wall_s": round(wall, 3),
+    }
+    if renderer is not None:
+        renderer.close()
+    return out
+
+
+def _r(value):
+    return round(float(value), 3) if value is not None and math.isfinite(value) else None
+
+
+def _flare_height(options, dh_seen, gear_h_true, h_true, model, rng):
+    """Main-gear height the flare law reads: the vision estimate (CG height minus the gear's
+    offset, true attitude), or the radio altimeter below 50 ft (true gear height plus noise)."""
+    offset = h_true - gear_h_true
+    if options.truth_guided:
+        return gear_h_true
+    if options.flare_height_source == "radio" and h_true <= RADIO_ALTIMETER_MAX_M:
+        return gear_h_true + float(rng.normal(0.0, options.radio_noise_m))
+    return dh_seen - offset
+
+
+def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true):
+    """(continue?, reason): the rule of :class:`MonitorParams`."""
+    m = options.monitor
+    recent = [(found, conf) for (tf, found, conf) in frames_log if t - tf <= m.window_s + 1e-9]
+    if recent:
+        found_fraction = sum(f for f, _ in recent) / len(recent)
+        if found_fraction < m.min_found_fraction:
+            return False, f"runway found in {found_fraction:.0%} of the frames of the last {m.window_s:g} s"
+        confidences = [c for f, c in recent if f]
+        if confidences and float(np.median(confidences)) < m.min_confidence:
+            return False, f"detection confidence {float(np.median(confidences)):.2f} < {m.min_confidence:g}"
+    if not guide_obs.started or not math.isfinite(guide_obs.dx_m):
+        return False, f"no estimate from {guide_obs.observer.name}"
+    if t - guide_obs.last_correction_s > m.max_coast_s:
+        return False, f"{guide_obs.observer.name} coasting for {t - guide_obs.last_correction_s:.1f} s"
+    if monitor_obs.started and math.isfinite(monitor_obs.dh_m):
+        limit = max(m.max_dh_disagreement_m, 0.05 * guide_obs.dh_m)
+        gap = abs(guide_obs.dh_m - monitor_obs.dh_m)
+        if gap > limit:
+            return False, (f"dH of {guide_obs.observer.name} and {monitor_obs.observer.name} differ by {gap:.1f} m "
+                           f"(> {limit:.1f} m)")
+        if math.isfinite(monitor_obs.dy_m) and abs(guide_obs.dy_m - monitor_obs.dy_m) > m.max_dy_disagreement_m:
+            return False, (f"dY of {guide_obs.observer.name} and {monitor_obs.observer.name} differ by "
+                           f"{abs(guide_obs.dy_m - monitor_obs.dy_m):.1f} m")
+    return True, "estimates consistent"
+
+
+#: The Monte Carlo's scenarios, flown in turn: the thesis's eight and ECC'15's three.
+MONTE_CARLO_SCENARIOS = tuple(f"thesis-{k}" for k in range(1, 9)) + ("ecc-1", "ecc-2", "ecc-3")
+KT_TO_MPS = 0.514444
+
+
+def monte_carlo_cases(n: int, seed: int = 0):
+    """``n`` (scenario, seed) cases: the scenarios in turn, a crosswind drawn in 0-15 kt (either
+    side), a Dickmanns gust on every other case, the pixel-noise seed = the case number."""
+    from dataclasses import replace
+    from visland.scenarios import resolve_scenario
+    rng = np.random.default_rng(seed)
+    cases = []
+    for i in range(n):
+        base = resolve_scenario(MONTE_CARLO_SCENARIOS[i % len(MONTE_CARLO_SCENARIOS)])
+        crosswind = float(rng.uniform(0.0, 15.0) * KT_TO_MPS * rng.choice([-1.0, 1.0]))
+        wind = replace(base.wind, crosswind_mps=crosswind, gust=bool(i % 2))
+        cases.append((replace(base, name=f"{base.name}-mc{i}", wind=wind), seed + i))
+    return cases
+
+
+def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print) -> dict:
+    """Fly ``n`` cases on the estimates and on the truth; write ``landings.csv`` and
+    ``touchdowns.png`` into ``out_dir``; return the summary (the JSON line)."""
+    from dataclasses import replace
+    from pathlib import Path
+    from visland.contracts import write_csv
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ValueError(f"--monte-carlo must be a positive number of cases, got {n!r}")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for scenario, seed in monte_carlo_cases(n, options.seed):
+        for truth in (False, True):
+            r = fly(scenario, replace(options, truth_guided=truth, seed=seed))
+            dev = r["deviations"]
+            rows.append({"case": scenario.name, "truth_guided": int(truth), "crosswind_mps": scenario.wind.crosswind_mps,
+                         "gust": int(scenario.wind.gust), "touchdown_x_m": r["touchdown_x_m"],
+                         "touchdown_y_m": r["touchdown_y_m"], "sink_rate_mps": r["sink_rate_mps"],
+                         "go_around": int(r["go_around"]), "go_around_reason": r["go_around_reason"],
+                         "dh_err_100ft_m": r["dh_err_100ft_m"],
+                         **{f"{q}_{h}_m": (dev.get(h) or {}).get(q) for h in ("200ft", "100ft", "50ft")
+                            for q in ("dy", "dgs")},
+                         "wall_s": r["wall_s"]})
+            echo(f"{scenario.name} {'truth' if truth else 'vision'}: " + (
+                f"go-around ({r['go_around_reason']})" if r["go_around"] else
+                f"touchdown x {r['touchdown_x_m']:.0f} m, y {r['touchdown_y_m']:+.2f} m, sink {r['sink_rate_mps']:.2f} m/s"
+                if r["touchdown_x_m"] is not None else "no touchdown") + f" ({r['wall_s']:.0f} s)")
+    columns = {k: [row[k] if row[k] is not None else math.nan for row in rows] for k in rows[0]}
+    write_csv(out / "landings.csv", columns, list(rows[0]))
+    summary = _monte_carlo_summary(rows)
+    _plot_touchdowns(rows, out / "touchdowns.png")
+    summary["landings_csv"] = str(out / "landings.csv")
+    summary["plot"] = str(out / "touchdowns.png")
+    return summary
+
+
+def _monte_carlo_summary(rows) -> dict:
+    vision = [r for r in rows if not r["truth_guided"]]
+    truth = {r["case"]: r for r in rows if r["truth_guided"]}
+    landed = [r for r in vision if not r["go_around"] and r["touchdown_x_m"] is not None]
+    in_window = [r for r in landed if 60.0 <= r["touchdown_x_m"] <= 823.0]
+    along = [r["touchdown_x_m"] - truth[r["case"]]["touchdown_x_m"] for r in landed
+             if truth[r["case"]]["touchdown_x_m"] is not None]
+    dy = [abs(r["touchdown_y_m"]) for r in landed]
+    return {"n_cases": len(vision), "landed": len(landed), "in_window": len(in_window),
+            "go_arounds": sum(r["go_around"] for r in vision),
+            "go_around_reasons": [r["go_around_reason"] for r in vision if r["go_around"]],
+            "touchdown_dy_p95_m": float(np.percentile(dy, 95)) if dy else None,
+            "touchdown_dx_vs_truth_max_abs_m": float(np.max(np.abs(along))) if along else None,
+            "sink_rate_max_mps": float(max(r["sink_rate_mps"] for r in landed)) if landed else None,
+            "dh_err_100ft_max_abs_m": float(max(abs(r["dh_err_100ft_m"]) for r in landed
+                                                if r["dh_err_100ft_m"] is not None)) if landed else None,
+            "wall_s_per_landing": float(np.mean([r["wall_s"] for r in rows]))}
+
+
+def _plot_touchdowns(rows, path) -> None:
+    """Touchdown points on the runway outline (default 3000 x 45 m) and the CS-AWO window."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(9, 3.2))
+    ax.add_patch(plt.Rectangle((0, -22.5), 1000, 45, fill=False, color="0.3"))
+    ax.axvspan(60, 823, color="tab:green", alpha=0.08, label="CS-AWO window 60-823 m")
+    for truth, colour, label in ((True, "0.5", "truth-guided"), (False, "tab:blue", "vision-guided")):
+        pts = [(r["touchdown_x_m"], r["touchdown_y_m"]) for r in rows
+               if r["truth_guided"] == int(truth) and r["touchdown_x_m"] is not None and not r["go_around"]]
+        if pts:
+            x, y = zip(*pts)
+            ax.scatter(x, y, s=14, color=colour, label=f"{label} ({len(pts)})", marker="o" if not truth else "x")
+    ax.set_xlim(0, 1000)
+    ax.set_ylim(-25, 25)
+    ax.set_xlabel("x from the threshold (m)")
+    ax.set_ylabel("y, right of the centreline (m)")
+    ax.set_title("visland fly --monte-carlo: main-gear touchdown points (first 1000 m of the runway)")
+    ax.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
