@@ -27,13 +27,8 @@ def _cmd_detect(args) -> int:
     params = _load_params(args.params)
     folder = FrameFolder(args.dir, camera=args.camera, telemetry=args.telemetry, frames_csv=args.frames_csv,
                          fps=args.fps, require_telemetry=False)
-    from visland.limits import check_camera, check_frame_times, check_rows_at_frames, check_telemetry_rate
-    check_camera(folder.camera, args.camera or str(Path(args.dir) / "camera.json"))
-    check_frame_times(folder.times_s, f"frame times of {args.dir}")
-    if folder.telemetry is not None:
-        check_telemetry_rate(folder.telemetry["t_s"], folder.times_s, str(folder.telemetry.path))
-    if folder.labels is not None:
-        check_rows_at_frames(folder.labels, folder.times_s, f"frame times of {args.dir}", "labels")
+    from visland.limits import check_frame_folder
+    check_frame_folder(folder, args.camera or str(Path(args.dir) / "camera.json"), args.dir)
     if folder.inertial is None:
         print(f"no telemetry ({args.telemetry or Path(args.dir) / 'telemetry.csv'} not found): roll and pitch are "
               "read off each frame (its horizon, then the runway's vanishing point)")

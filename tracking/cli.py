@@ -89,13 +89,8 @@ def _cmd_track(args) -> int:
         params = TrackerParams.from_dict({**params.to_dict(), "update_policy": args.policy}, source="--policy")
     folder = FrameFolder(args.folder, camera=args.camera, telemetry=args.telemetry, fps=args.fps,
                          require_telemetry=not args.no_inertial)
-    from visland.limits import check_camera, check_frame_times, check_rows_at_frames, check_telemetry_rate
-    check_camera(folder.camera, args.camera or str(Path(args.folder) / "camera.json"))
-    check_frame_times(folder.times_s, f"frame times of {args.folder}")
-    if folder.telemetry is not None:
-        check_telemetry_rate(folder.telemetry["t_s"], folder.times_s, str(folder.telemetry.path))
-    if folder.labels is not None:
-        check_rows_at_frames(folder.labels, folder.times_s, f"frame times of {args.folder}", "labels")
+    from visland.limits import check_frame_folder
+    check_frame_folder(folder, args.camera or str(Path(args.folder) / "camera.json"), args.folder)
     run = track_source(folder, init=args.init, params=params, anchor=args.anchor, anchor_every=args.anchor_every,
                        start=args.start, edge_points=args.edge_points, use_inertial=not args.no_inertial)
     write_csv(out, run.columns, run.column_order)

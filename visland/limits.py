@@ -230,3 +230,14 @@ def markdown_table() -> str:
     rows.append("| `frame` (frames.csv, labels, measurements) | integers 0, 1, 2... in order | one row per frame |")
     rows.append("| `found`, `*_visible` | 0 or 1 | flags |")
     return "\n".join(rows)
+
+
+def check_frame_folder(folder, camera_source: str, where: str) -> None:
+    """What every command reading a :class:`visland.folder.FrameFolder` checks before its first
+    frame: the camera, the frame times, the telemetry's rate against them and the labels' rows."""
+    check_camera(folder.camera, camera_source)
+    check_frame_times(folder.times_s, f"frame times of {where}")
+    if folder.telemetry is not None:
+        check_telemetry_rate(folder.telemetry["t_s"], folder.times_s, str(folder.telemetry.path))
+    if folder.labels is not None:
+        check_rows_at_frames(folder.labels, folder.times_s, f"frame times of {where}", "labels")
