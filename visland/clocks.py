@@ -11,8 +11,9 @@ does not depend on the runway or the haze) must follow the telemetry's roll. The
 the frames is compared with the telemetry's, shifted by every candidate ``S``; a constant
 difference (a camera mounted with a roll error) is allowed. The best ``S`` minimises the RMS
 difference; its uncertainty is that of a least-squares fit linearised about it,
-``sigma_S = sigma_residual / sqrt(sum(roll_rate^2))``: without roll motion (straight and
-level) the data say nothing and the estimate is refused.
+``sigma_S = sigma_residual / sqrt(sum(roll_rate^2))``, widened for residuals correlated from
+frame to frame (fewer independent samples); without roll motion (straight and level), or with a
+horizon too poor to follow the roll, the estimate is refused.
 """
 from __future__ import annotations
 
@@ -94,8 +95,17 @@ def estimate_time_offset(source, max_offset_s: float = MAX_OFFSET_S) -> TimeOffs
     rate = np.interp(times[inside] - offset, t_tel, np.gradient(roll_tel, t_tel))
     residual = float(costs[best])
     sigma = residual / math.sqrt(max(float(np.sum(rate ** 2)), 1e-30))
+    # residuals that follow each other (a horizon biased for seconds by clouds or terrain) carry
+    # fewer independent samples than frames: widen sigma by sqrt((1 + rho) / (1 - rho)), rho
+    # their lag-one correlation
+    r = rolls[inside] - np.interp(times[inside] - offset, t_tel, roll_tel)
+    r = r - r.mean()
+    rho = float(np.clip(np.dot(r[:-1], r[1:]) / max(float(np.dot(r, r)), 1e-30), 0.0, 0.99)) if len(r) > 2 else 0.0
+    sigma *= math.sqrt((1.0 + rho) / (1.0 - rho))
     if not sigma <= MAX_SIGMA_S:
-        spread = f"one sigma {sigma:.2f} s" if sigma < 100 else "no roll motion at all"
-        raise ValueError(f"{source.name}: the frames show too little roll motion to fix the clock offset ({spread}: "
-                         "straight and level flight says nothing); give --time-offset")
+        spread = (f"one sigma {sigma:.2f} s, the horizon's roll {math.degrees(residual):.2f} deg RMS off the "
+                  "telemetry's" if sigma < 100 else "no roll motion at all")
+        raise ValueError(f"{source.name}: the clock offset cannot be fixed ({spread}): too little roll motion "
+                         "(straight and level flight says nothing) or a horizon the frames do not show clearly; "
+                         "give --time-offset")
     return TimeOffset(offset_s=offset, sigma_s=sigma, frames_used=len(times), residual_deg=math.degrees(residual))
