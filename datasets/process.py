@@ -62,12 +62,8 @@ class ProcessOptions:
         from visland.limits import FPS_LIMIT
         if self.fps is not None and not (math.isfinite(self.fps) and FPS_LIMIT.low <= self.fps <= FPS_LIMIT.high):
             raise ValueError(f"--fps must be a frame rate in {FPS_LIMIT.low:g}..{FPS_LIMIT.high:g} Hz, got {self.fps!r}")
-        if self.initial_height_m is not None and not (math.isfinite(self.initial_height_m)
-                                                      and 0 < self.initial_height_m <= 30000):
-            raise ValueError(f"--initial-height must be a positive number of metres up to 30000 (the plausible "
-                             f"dh_m), got {self.initial_height_m!r}")
-        if not (math.isfinite(self.initial_error) and -0.9 < self.initial_error < 10):
-            raise ValueError(f"--initial-error must lie in (-0.9, 10), got {self.initial_error!r}")
+        from visland.estimation.command import check_initial_guess
+        check_initial_guess(self.initial_height_m, self.initial_error)
         if not (math.isfinite(self.time_offset_s) and abs(self.time_offset_s) <= 60.0):
             raise ValueError(f"--time-offset must be a number of seconds within +-60, got {self.time_offset_s!r}")
 

@@ -99,16 +99,27 @@ def detect_runway(image, camera: CameraModel, roll_rad: float, pitch_rad: float,
     if previous is not None and not isinstance(previous, DetectionResult):
         raise ValueError(f"previous must be a DetectionResult or None, got {type(previous).__name__}")
 
+    problem = check_frame(image, camera)
+    if problem:
+        return not_found(problem, roll_rad=_as_float(roll_rad), pitch_rad=_as_float(pitch_rad),
+                         image_size=(camera.width, camera.height), elapsed_s=time.perf_counter() - start)
+    # features are measured in the pinhole image (SPEC): a frame through a distorting lens is
+    # resampled first; the aircraft's structure never reaches the search
+    return detect_in_scene_frame(scene_frame(image, camera), camera, roll_rad, pitch_rad, params, previous, start)
+
+
+def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad: float, params: DetectorParams,
+                          previous: DetectionResult | None = None, start: float | None = None) -> DetectionResult:
+    """:func:`detect_runway` on a frame already checked (:func:`check_frame`) and turned into its
+    scene frame (:func:`visland.folder.scene_frame`), with ``params`` already scaled to ``camera``:
+    for a caller that needs that frame itself (the horizon read off it) and must not prepare it
+    twice. ``start``: ``time.perf_counter()`` when the frame's work began (default now)."""
+    start = time.perf_counter() if start is None else start
+
     def fail(reason: str) -> DetectionResult:
         return not_found(reason, roll_rad=_as_float(roll_rad), pitch_rad=_as_float(pitch_rad),
                          image_size=(camera.width, camera.height), elapsed_s=time.perf_counter() - start)
 
-    problem = check_frame(image, camera)
-    if problem:
-        return fail(problem)
-    # features are measured in the pinhole image (SPEC): a frame through a distorting lens is
-    # resampled first; the aircraft's structure never reaches the search
-    image = scene_frame(image, camera)
     colour = None
     if image.ndim == 3:
         colour, image = image, as_grey(image)

@@ -41,10 +41,11 @@ import numpy as np
 
 from visland.camera import CameraModel
 from visland.detection.attitude import ImageAttitude, attitude_from_image
-from visland.detection.detector import detect_runway
+from visland.detection.detector import check_frame, detect_in_scene_frame, detect_runway
 from visland.detection.horizon import horizon_frame
 from visland.detection.params import DetectorParams
 from visland.detection.result import DetectionResult, not_found
+from visland.folder import as_grey, ignored_pixels, scene_frame
 
 __all__ = ["DetectionSequence"]
 
@@ -177,14 +178,15 @@ class DetectionSequence:
                          image_size=result.image_size, elapsed_s=result.elapsed_s)
 
     def _detect_without_attitude(self, image, prior: DetectionResult | None) -> DetectionResult:
-        """The horizon from the frame, moved through the runway's vanishing point when found."""
-        from visland.folder import as_grey, ignored_pixels, scene_frame
-        from visland.detection.detector import check_frame
+        """The horizon from the frame, moved through the runway's vanishing point when found.
+
+        The frame is checked and turned into its scene frame once, for the horizon and for
+        every detection on it."""
         problem = check_frame(image, self.camera)
         if problem:
             return not_found(problem)
-        grey = as_grey(scene_frame(image, self.camera))
-        attitude = attitude_from_image(grey, self.camera, ignored_pixels(self.camera), self.image_attitude)
+        scene = scene_frame(image, self.camera)
+        attitude = attitude_from_image(as_grey(scene), self.camera, ignored_pixels(self.camera), self.image_attitude)
         if isinstance(attitude, str):
             return not_found(f"no attitude data and {attitude}")
         params = self.params
@@ -194,18 +196,16 @@ class DetectionSequence:
             f = self.camera.fy
             params = replace(params, horizon_sigma_px=max(params.horizon_sigma_px, f * math.radians(IMAGE_HORIZON_SIGMA_DEG)),
                              vp_tolerance_px=max(params.vp_tolerance_px, f * math.radians(2 * IMAGE_HORIZON_SIGMA_DEG)))
-        result = detect_runway(image, self.camera, attitude.roll_rad, attitude.pitch_rad, params=params,
-                               previous=prior)
+        result = detect_in_scene_frame(scene, self.camera, attitude.roll_rad, attitude.pitch_rad, params, prior)
         vp = _edges_crossing(result, self.camera)
         if vp is None:
-            self.image_attitude = attitude if self.image_attitude is None else self.image_attitude
-            return result
+            return result           # the horizon's offset from the last runway is carried on
         corrected = attitude.through_point(self.camera, vp)
         self.image_attitude = corrected
         if abs(corrected.visible_offset_px - attitude.visible_offset_px) > 0.5:
             # the horizon moved: measure again on the right one
-            again = detect_runway(image, self.camera, corrected.roll_rad, corrected.pitch_rad, params=self.params,
-                                  previous=prior)
+            again = detect_in_scene_frame(scene, self.camera, corrected.roll_rad, corrected.pitch_rad, self.params,
+                                          prior)
             if again.found:
                 result = again
         return result

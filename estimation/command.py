@@ -31,6 +31,16 @@ __all__ = ["EstimateOptions", "estimate_folder", "load_observer_params", "ESTIMA
 
 
 
+def check_initial_guess(initial_height_m: float | None, initial_error: float) -> None:
+    """``--initial-height`` (None, or a plausible dh_m) and ``--initial-error`` (a fraction in
+    (-0.9, 10)), one sentence each; shared by ``estimate`` and ``process``."""
+    if initial_height_m is not None and not (math.isfinite(initial_height_m) and 0 < initial_height_m <= 30000):
+        raise ValueError(f"--initial-height must be a positive number of metres up to 30000 (the plausible "
+                         f"dh_m), got {initial_height_m!r}")
+    if not (math.isfinite(initial_error) and -0.9 < initial_error < 10):
+        raise ValueError(f"--initial-error must lie in (-0.9, 10), got {initial_error!r}")
+
+
 @dataclass(frozen=True)
 class EstimateOptions:
     """What ``visland estimate`` does with a folder (see the command's --help)."""
@@ -50,12 +60,7 @@ class EstimateOptions:
             raise ValueError("--observer: give at least one observer name")
         for name in self.observers:
             observer_class(name)          # raises with the list of known names
-        if self.initial_height_m is not None and not (math.isfinite(self.initial_height_m)
-                                                      and 0 < self.initial_height_m <= 30000):
-            raise ValueError(f"--initial-height must be a positive number of metres up to 30000 (the plausible "
-                             f"dh_m), got {self.initial_height_m!r}")
-        if not (math.isfinite(self.initial_error) and -0.9 < self.initial_error < 10):
-            raise ValueError(f"--initial-error must lie in (-0.9, 10), got {self.initial_error!r}")
+        check_initial_guess(self.initial_height_m, self.initial_error)
         if not (math.isfinite(self.aim_distance_m) and 0 <= self.aim_distance_m <= 2000):
             raise ValueError(f"--aim-distance must lie in [0, 2000] m, got {self.aim_distance_m!r}")
 
