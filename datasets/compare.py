@@ -46,6 +46,7 @@ class RunResult:
     truth: dict
     series: dict           # observer -> dict of arrays (t_s, dh_m, dy_m, dx_m)
     start_t_s: dict = field(default_factory=dict)   # observer -> its start (metrics.json); absent: first estimate
+    diverged: dict = field(default_factory=dict)    # observer -> why it was cut off (run.json "diverged")
 
 
 def load_run(path) -> RunResult:
@@ -76,7 +77,12 @@ def load_run(path) -> RunResult:
                          "run, e.g. \"detection\", is required)")
     if scenario is not None and not isinstance(scenario, str):
         raise ValueError(f"{info_path}: field 'scenario' is {json.dumps(scenario)} (a name or null is required)")
-    return RunResult(path, source, scenario or path.name, dict(truth), series, _observer_starts(path / "metrics.json"))
+    diverged = info.get("diverged") or {}
+    if not isinstance(diverged, dict):
+        raise ValueError(f"{info_path}: field 'diverged' is {json.dumps(diverged)} (an object mapping observers to "
+                         "a sentence is required)")
+    return RunResult(path, source, scenario or path.name, dict(truth), series, _observer_starts(path / "metrics.json"),
+                     {str(k): str(v) for k, v in diverged.items()})
 
 
 def _observer_starts(metrics_path: Path) -> dict:
@@ -193,7 +199,9 @@ def compare_runs(run_paths, out_dir, echo=print) -> dict:
         md.append(f"- {label}: {METRIC_DEFINITIONS[key]}.")
     md.append("- error at h ft: " + METRIC_DEFINITIONS["err_<h>ft_m"].replace("dH - dH_hat", "truth - estimate")
               + "; mean and standard deviation (population) of the 100 ft errors over the runs that have one.")
-    notes = _never_low_enough(runs, METRIC_HEIGHTS_FT)
+    notes = _never_low_enough(runs, METRIC_HEIGHTS_FT) + [
+        f"Note: in run {run.path} ({run.scenario}, {run.source}) {observer} {why} (its later errors are -)."
+        for run in runs for observer, why in run.diverged.items()]
     if notes:
         md[3:3] = notes + [""]
     text = "\n".join(md) + "\n"

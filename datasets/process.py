@@ -220,10 +220,11 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
             shutil.copyfile(source.runway_json, staging / "runway.json")
         read_measurements(staging / "measurements.csv")       # what we hand on reads back cleanly
         not_started: dict = {}
+        diverged: dict = {}
         metrics = estimate_folder(staging, _with_measurements(estimate_options, staging / "measurements.csv"),
                                   staging / "estimates.csv",
                                   echo=lambda line: echo(line.replace(str(staging), str(out_dir))),
-                                  not_started=not_started)
+                                  not_started=not_started, diverged=diverged)
         deviations = _deviation_errors(source.truth, staging / "estimates.csv") if source.truth is not None else {}
         if metrics:
             doc = json.loads((staging / "metrics.json").read_text())
@@ -245,6 +246,8 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
             "flagged": [{"frame": int(i), "reason": r} for i, r in measurements.flagged],
             # observers that never started (their estimates.csv rows are empty), and why
             "no_estimates": not_started,
+            # observers cut off when they diverged (estimates withheld from then on), and when
+            "diverged": diverged,
             "throughput": {
                 "measure_wall_s": measurements.wall_s,
                 "analysis_s": measurements.analysis_s,
@@ -290,6 +293,8 @@ def _write_report(folder: Path, source, measurements, metrics, deviations, run) 
     ]
     for observer, why in run.get("no_estimates", {}).items():
         summary.append((f"{observer}: no estimates", why))
+    for observer, why in run.get("diverged", {}).items():
+        summary.append((f"{observer}: DIVERGED", why))
     write_report(folder / "report.html", title=f"visland run: {run['scenario'] or Path(run['input']).name} "
                                                f"({run['source']})",
                  summary_rows=summary, measurements=columns, estimates=dict(estimates),

@@ -115,13 +115,16 @@ def _read_inputs(folder: Path, measurements: str):
     return camera, InertialSeries.from_table(telemetry), features, truth, path
 
 
-def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_started: dict | None = None) -> dict:
+def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_started: dict | None = None,
+                    diverged: dict | None = None) -> dict:
     """Run ``options.observers`` on ``folder``; write ``out_path`` (and metrics.json with truth).
 
     Returns the metrics per observer (empty without truth). An observer that cannot start
     (no frame carries the features it needs) still has its rows in ``out_path``, every estimate
     cell empty and coasting = 1; why it did not start is echoed and, when ``not_started`` is a
-    dict, stored there under its name.
+    dict, stored there under its name. An observer that diverged (cut off by
+    :func:`visland.estimation.runner.run_observer`) is echoed likewise and, when ``diverged`` is a
+    dict, its sentence stored there.
     """
     from visland.contracts import ESTIMATE_COLUMNS, atomic_write_text, write_csv
     from visland.estimation.inputs import prepare_inputs
@@ -185,14 +188,20 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_
         n_withheld = int(np.sum(started & ~np.isfinite(run.dh_m)))
         line = (f"{name}: started at t = {run.start_t_s:.2f} s from dH0 = {run.dh0_m:.1f} m; "
                 f"{n_coast} frames coasted{' (' + ', '.join(f'{n} {r}' for r, n in reasons.items()) + ')' if reasons else ''}; "
-                + (f"{n_withheld} frames withheld after a long gap; " if n_withheld else "") +
+                + (f"{n_withheld} frames withheld (a long gap without measurement, or no height); "
+                   if n_withheld else "") +
                 f"{1e6 * run.step_time_s / max(run.n_steps, 1):.0f} us/step")
         for note in run.notes:
             echo(f"{name}: {note}")
+        if run.diverged:
+            echo(f"{name}: {run.diverged}")
+            if diverged is not None:
+                diverged[name] = run.diverged
         if dh_true is not None:
             m = run_metrics(run.t_s, dh_true, run.dh_m, start_t_s=run.start_t_s)
             m.update({"start_t_s": run.start_t_s, "dh0_m": run.dh0_m, "n_frames": len(run), "n_coasting": n_coast,
                       "n_withheld": n_withheld,
+                      "diverged_t_s": run.diverged_t_s if run.diverged else None,
                       "coasting_reasons": reasons, "params": run.params})
             if run.notes:
                 m["notes"] = list(run.notes)

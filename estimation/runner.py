@@ -5,6 +5,14 @@ measured part initialises the state, ``eta = 1/dh0``), steps through every later
 rate) and records one row per camera frame: dH, the deviations of
 :mod:`visland.estimation.deviations`, the observability index, and whether the frame's step
 coasted (and why). Frames before the start have no estimate (NaN) and say so.
+
+A diverged observer is cut off (issue 19): every observer projects ``eta = 1/dH`` onto its
+domain (:data:`visland.estimation.base.ETA_MIN`, ``ETA_MAX``: dH from 0.5 m to 20 km), so a
+correction that left the physical domain shows as a height pinned on the domain's bound, which
+is not a height. Such frames are withheld. Pinned for :data:`DIVERGED_AFTER_S` while
+measurements keep correcting it, the observer has diverged: the run stops stepping it, every
+later frame is withheld with the reason, and :attr:`ObserverRun.diverged_t_s` says when. One
+that ends the run pinned is reported as diverged as well.
 """
 from __future__ import annotations
 
@@ -14,11 +22,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from visland.estimation.base import Observer
+from visland.estimation.base import ETA_MAX, ETA_MIN, Observer
 from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M, deviations_from_lines, deviations_from_points
 from visland.estimation.inputs import PreparedInputs
 
-__all__ = ["ObserverRun", "run_observer", "MAX_COAST_S"]
+__all__ = ["ObserverRun", "run_observer", "MAX_COAST_S", "DIVERGED_AFTER_S", "DIVERGED_CORRECTIONS", "on_domain_bound"]
 
 
 @dataclass
@@ -29,7 +37,9 @@ class ObserverRun:
     the speed target is about); ``n_steps`` the number of steps taken. ``extras`` holds the
     per-frame outputs an observer reports beyond the SPEC columns (``extra_outputs()``, e.g. the
     wind of ``dickmanns-4d``); ``notes`` what the observer said once about the run (e.g. that it
-    cannot estimate the wind without airspeed).
+    cannot estimate the wind without airspeed). ``diverged_t_s`` is the time from which the
+    observer's height sat on its domain bound until it was cut off (NaN: it did not diverge),
+    ``diverged`` one sentence saying so (empty if not).
     """
 
     observer: str
@@ -50,6 +60,8 @@ class ObserverRun:
     params: dict = field(default_factory=dict)
     extras: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
+    diverged_t_s: float = math.nan
+    diverged: str = ""
 
     def __len__(self):
         return len(self.t_s)
@@ -61,6 +73,21 @@ class ObserverRun:
 MAX_COAST_S = 2.0
 #: Virtual coordinates |X_v/Z_v| beyond this (a point 10^4 heights away) are not a runway corner.
 _MAX_ABS_YV = 1e4
+#: A height pinned on the observers' domain bound for this long (s), through at least
+#: :data:`DIVERGED_CORRECTIONS` measurements that did not bring it back, is a diverged observer:
+#: cut off. Shorter excursions are withheld frame by frame and the run goes on: on the thesis
+#: scenarios an observer knocked onto the bound by a 0.5 deg mounting error or 5 px of noise came
+#: back within 7.5 s when it came back at all (and then converged as without the excursion);
+#: those that stayed longer stayed to the end of the run. One still on the bound at the end of
+#: the run is reported as diverged too.
+DIVERGED_AFTER_S = 10.0
+DIVERGED_CORRECTIONS = 3
+
+
+def on_domain_bound(dh_m: float) -> bool:
+    """True when ``dh_m`` sits on the observers' projection bound (0.5 m or 20 km, within 0.1 %):
+    the projection hiding a correction outside the physical domain, not a height."""
+    return dh_m >= 0.999 / ETA_MIN or dh_m <= 1.001 / ETA_MAX
 
 
 def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
@@ -68,8 +95,9 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     """Reset ``observer`` at its first measured step with the height guess ``dh0_m`` and run it.
 
     Frames more than ``max_coast_s`` after the last correction get no estimate (NaN) and the
-    reason "no measurement for ... s". Raises ``ValueError`` when no frame carries the
-    observer's features.
+    reason "no measurement for ... s"; frames whose height sits on the observer's domain bound
+    get none either, and after :data:`DIVERGED_AFTER_S` there the observer is cut off (module
+    docstring). Raises ``ValueError`` when no frame carries the observer's features.
     """
     if not (math.isfinite(max_coast_s) and max_coast_s > 0):
         raise ValueError(f"max_coast_s must be a positive number of seconds, got {max_coast_s!r}")
@@ -96,6 +124,11 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
         if f < 0:
             return
         inp = steps[j]
+        if on_domain_bound(estimate.dh_m):
+            coasting[f] = True
+            reason[f] = (f"height on the observer's domain bound (dH = {estimate.dh_m:g} m): not a height, "
+                         f"estimate withheld")
+            return
         if not estimate.coasting:
             last_correction[0] = float(inp.t_s)
         elif inp.t_s - last_correction[0] > max_coast_s:
@@ -134,12 +167,39 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     record(start, first)
     step = observer.step
     elapsed = 0.0
+    bound_since = math.nan           # time from which the height sits on the domain bound
+    corrected_on_bound = 0           # measurements that have not moved it off since
+    diverged_t_s, diverged = math.nan, ""
+    n_steps = 0
     for j in range(start + 1, len(steps)):
         t0 = time.perf_counter()
         estimate = step(steps[j])
         elapsed += time.perf_counter() - t0
+        n_steps += 1
         if frame_of_step[j] >= 0:
             record(j, estimate)
+        if not on_domain_bound(estimate.dh_m):
+            bound_since, corrected_on_bound = math.nan, 0
+            continue
+        t_s = float(steps[j].t_s)
+        if not math.isfinite(bound_since):
+            bound_since, corrected_on_bound = t_s, 0
+        corrected_on_bound += not estimate.coasting
+        if t_s - bound_since >= DIVERGED_AFTER_S - 1e-9 and corrected_on_bound >= DIVERGED_CORRECTIONS:
+            diverged_t_s = bound_since
+            diverged = (f"diverged: its height sat on its domain bound (dH = {estimate.dh_m:g} m) from "
+                        f"t = {bound_since:.2f} s through {corrected_on_bound} measurements; cut off, no "
+                        f"estimate from then on")
+            later = prepared.frame_t_s >= bound_since - 1e-9
+            for key in out:
+                out[key][later] = np.nan
+            coasting[later] = True
+            reason[later] = diverged
+            break
+    if not diverged and math.isfinite(bound_since):
+        diverged = (f"diverged: its height sat on its domain bound from t = {bound_since:.2f} s to the end of the "
+                    f"run; no estimate from then on")
+        diverged_t_s = bound_since
     params = observer.params.to_dict() if hasattr(observer.params, "to_dict") else {}
     dpsi = prepared.dpsi_rad[prepared.step_of_frame]
     if "dpsi_rad" in extras:             # an observer that corrects the heading deviation reports its own
@@ -147,8 +207,9 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     return ObserverRun(observer=observer.name, features=observer.features, t_s=prepared.frame_t_s.copy(),
                        coasting=coasting, reason=reason, dpsi_rad=dpsi,
                        start_t_s=float(steps[start].t_s), dh0_m=float(dh0_m), step_time_s=elapsed,
-                       n_steps=len(steps) - start - 1, params=params, extras=extras,
-                       notes=list(getattr(observer, "notes", ())), **out)
+                       n_steps=n_steps, params=params, extras=extras,
+                       notes=list(getattr(observer, "notes", ())), diverged_t_s=diverged_t_s, diverged=diverged,
+                       **out)
 
 
 def _level_height(distance_m: float, inp, last_y1: list) -> float:

@@ -296,6 +296,7 @@ def _table_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: st
     per_scenario = {obs: {} for obs in spec.observers}
     runs_traj1 = {}
     timing = {obs: [] for obs in spec.observers}
+    diverged: dict = {}            # observer -> {scenario: time it was cut off}
     case1 = None
     for k, scenario in enumerate(spec.scenarios):
         case = simulate_case(scenario, condition, seed=seed + k, heading=heading)
@@ -304,6 +305,8 @@ def _table_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: st
         for obs in spec.observers:
             run, metrics = _run(obs, case, condition.params.get(obs))
             per_scenario[obs][scenario] = metrics
+            if run.diverged:
+                diverged.setdefault(obs, {})[scenario] = run.diverged_t_s
             timing[obs].append(run.step_time_s / max(run.n_steps, 1))
             if k == 0:
                 runs_traj1[obs] = run
@@ -321,7 +324,10 @@ def _table_study(spec: StudySpec, out: Path | None, seed: int, echo, heading: st
                                                                 for s in spec.scenarios},
                         "step_us": 1e6 * float(np.median(timing[obs]))}
     flags = _print_table(spec, results, echo)
-    extra = {}
+    for obs, where in diverged.items():
+        echo(f"{obs} diverged (cut off, its later figures n/a; visland.estimation.runner): "
+             + ", ".join(f"{s} at {t:.2f} s" for s, t in where.items()))
+    extra = {"diverged": diverged} if diverged else {}
     if spec.thesis_table and case1 is not None:
         extra["convergence_notes"] = _convergence_notes(spec, results, case1, runs_traj1, echo)
     if condition.calibration_error_deg:

@@ -15,6 +15,7 @@ import pytest
 
 from visland.cli import main
 from visland.contracts import read_frames_csv, read_labels, read_telemetry, read_truth
+from visland.estimation.runner import on_domain_bound
 from visland.limits import COLUMN_LIMITS, check_camera, check_telemetry_rate, markdown_table
 from visland.userfiles import check_input_file, check_output_file, check_output_folder, read_json_object
 
@@ -283,3 +284,41 @@ def test_an_off_centre_principal_point_and_an_absurd_fps_are_refused(simulated, 
         check_camera(CameraModel.load(path), "camera.json")
     with pytest.raises(ValueError, match=re.escape("--fps must be a frame rate in 0.1..10000 Hz, got 1e+308")):
         ProcessOptions(fps=1e308)
+
+
+# ---------------------------------------------------------------- issue 19 item 3: a diverged observer is cut off
+def test_a_diverged_observer_is_cut_off_and_said_to_be_everywhere(simulated, tmp_path, capsys):
+    """camera.json says the camera looks 0.5 deg less down than it does (thesis-3, ideal corners): ccpi-hg-2p's
+    height is driven onto its domain bound and stays there; it is cut off, said to have diverged in the log,
+    run.json, the report and compare, and none of its rows carries the bound as a height."""
+    folder = tmp_path / "misaligned"
+    shutil.copytree(simulated, folder)
+    camera = json.loads((folder / "camera.json").read_text())
+    camera["mount_rpy_deg"][1] += 0.5
+    (folder / "camera.json").write_text(json.dumps(camera))
+    run = tmp_path / "run"
+    assert main(["process", str(folder), "--out", str(run), "--source", "ideal", "--observer", "ccpi-hg-2p",
+                 "oj-2p"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"ccpi-hg-2p: diverged: its height sat on its domain bound \(dH = 0\.5 m\) from t = [\d.]+ s "
+                     r"through \d+ measurements; cut off", out)
+    info = json.loads((run / "run.json").read_text())
+    assert list(info["diverged"]) == ["ccpi-hg-2p"]
+    metrics = json.loads((run / "metrics.json").read_text())["observers"]
+    assert metrics["ccpi-hg-2p"]["diverged_t_s"] > 0 and metrics["oj-2p"]["diverged_t_s"] is None
+    estimates = read_estimates_rows(run / "estimates.csv", "ccpi-hg-2p")
+    after = estimates["t_s"] >= metrics["ccpi-hg-2p"]["diverged_t_s"]
+    assert after.sum() > 100 and np.isnan(estimates["dh_m"][after]).all()
+    assert (estimates["coasting"][after] == 1).all()
+    finite = estimates["dh_m"][np.isfinite(estimates["dh_m"])]
+    assert not any(on_domain_bound(v) for v in finite)              # the bound is never printed as a height
+    assert "ccpi-hg-2p: DIVERGED" in (run / "report.html").read_text()
+    assert main(["compare", str(run), "--out", str(tmp_path / "cmp")]) == 0
+    assert re.search(r"ccpi-hg-2p diverged: .* \(its later errors are -\)", (tmp_path / "cmp" / "compare.md").read_text())
+
+
+def read_estimates_rows(path, observer):
+    from visland.contracts import read_estimates
+    table = read_estimates(path)
+    keep = table["observer"] == observer
+    return {k: np.asarray(table[k][keep], dtype=float) for k in ("t_s", "dh_m", "coasting")}
