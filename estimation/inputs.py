@@ -51,6 +51,9 @@ __all__ = ["InertialSeries", "FeatureSeries", "PreparedInputs", "prepare_inputs"
 #: Frame times within this of a telemetry sample share its step.
 #: The runway-heading estimate is used once its standard error is under this (radians).
 HEADING_SETTLED_RAD = math.radians(1.0)
+#: ... and once single frames' heading samples scatter by less than this (their local robust
+#: standard deviation, :func:`_robust_heading_weights`): far out they are biased by about their scatter.
+HEADING_SAMPLE_SETTLED_RAD = math.radians(0.5)
 #: The mounting's self-calibration corrects the steps once its roll and pitch standard deviations
 #: are under this (radians).
 CALIBRATION_SETTLED_RAD = math.radians(0.05)
@@ -239,6 +242,8 @@ def _heading_weights(near_uv_px: np.ndarray) -> np.ndarray:
     The vanishing point comes from the edges; for a given pixel noise its angular error shrinks
     as the runway grows in the image (roughly as 1 / its size), so an inverse-variance mean
     weighs each frame by the squared size. Frames without both corners reuse the last weight.
+    (The streaming estimator of ``visland fly`` still uses these; the offline one uses
+    :func:`_robust_heading_weights`.)
     """
     span = np.hypot(near_uv_px[:, 1, 0] - near_uv_px[:, 0, 0], near_uv_px[:, 1, 1] - near_uv_px[:, 0, 1])
     weights = span ** 2
@@ -249,6 +254,70 @@ def _heading_weights(near_uv_px: np.ndarray) -> np.ndarray:
         else:
             weights[i] = last
     return weights
+
+
+#: Frames (valid samples) in the causal window that measures the local spread of the heading samples.
+HEADING_WINDOW_FRAMES = 25
+#: Valid samples the window needs before their spread is trusted (a MAD of 2-4 samples can be
+#: near zero by chance); until then a sample has no weight, unless the samples agree exactly.
+HEADING_MIN_SAMPLES = 10
+#: A heading sample further than this many local robust standard deviations from the window's
+#: median is an outlier and gets no weight.
+HEADING_GATE_SIGMAS = 4.0
+#: Floor of the local standard deviation (radians): exact samples agree to rounding, and the
+#: weights only need to stay finite.
+HEADING_SIGMA_FLOOR_RAD = 1e-5
+
+
+def _robust_heading_weights(angles_rad: np.ndarray, window: int = HEADING_WINDOW_FRAMES,
+                            gate_sigmas: float = HEADING_GATE_SIGMAS) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse-variance weights of the runway-heading samples from their own local spread, with a gate.
+
+    Far out the vanishing point of a runway a few pixels wide is not only noisier than
+    :func:`_heading_weights`' squared span predicts, it is heavy-tailed and biased: on thesis-4
+    with 5 px of corner noise the per-frame heading errors have a robust spread of 2.5 deg and a
+    median of +2.7 deg in the first 5 s (single frames 50-100 deg off), 0.2 deg and +0.02 deg
+    from 20 s on. Weighted by the squared span, those first seconds kept the running mean 2.6 deg
+    off at 16 s and 1 deg off at 32 s; kf-2p then ended 60 m high at 100 ft.
+
+    Each sample's standard deviation is estimated from the samples themselves, causally: ``s_i =
+    1.4826 MAD`` of the last ``window`` valid samples up to and including ``i``, floored at
+    :data:`HEADING_SIGMA_FLOOR_RAD` (infinite, weight 0, while the window holds fewer than
+    :data:`HEADING_MIN_SAMPLES` that do not agree to the floor); its weight is ``1 / s_i^2``
+    (inverse variance: the seconds with a tenth of the spread count a hundred times more), and 0
+    when it lies more than ``gate_sigmas`` ``s_i`` from the window's median (a gate on the
+    normalised residual, as a Mahalanobis gate in one dimension) or when it is the first valid
+    sample (no spread known yet). Exact samples all agree, so any weights give the same mean:
+    the estimate on ideal measurements is unchanged.
+
+    Returns ``(weights, sigma_rad)`` of shape (m,): the weights (0 where the sample is NaN) and
+    the local standard deviation ``s_i`` (infinite until two valid samples, NaN where the sample is).
+    """
+    angles_rad = np.asarray(angles_rad, dtype=float)
+    weights = np.zeros(len(angles_rad))
+    sigma_out = np.full(len(angles_rad), np.nan)
+    valid = np.nonzero(np.isfinite(angles_rad))[0]
+    sigma_out[valid] = np.inf
+    if valid.size < 2:
+        return weights, sigma_out
+    x = wrap_pi(angles_rad[valid] - angles_rad[valid[0]])
+    n = len(x)
+    padded = np.concatenate([np.full(window - 1, np.nan), x])
+    windows = np.lib.stride_tricks.sliding_window_view(padded, window)       # (n, window), causal
+    count = np.minimum(np.arange(1, n + 1), window)
+    median = np.nanmedian(windows, axis=1)
+    mad_sigma = 1.4826 * np.nanmedian(np.abs(windows - median[:, None]), axis=1)
+    spread = np.nanmax(windows, axis=1) - np.nanmin(windows, axis=1)
+    # fewer than HEADING_MIN_SAMPLES: no spread known yet (weight 0), unless they agree exactly
+    sigma = np.where(count >= HEADING_MIN_SAMPLES, np.maximum(mad_sigma, HEADING_SIGMA_FLOOR_RAD),
+                     np.where(spread <= HEADING_SIGMA_FLOOR_RAD, HEADING_SIGMA_FLOOR_RAD, np.inf))
+    w = 1.0 / sigma ** 2
+    w[np.abs(x - median) > gate_sigmas * sigma] = 0.0
+    w[0] = 0.0
+    sigma[0] = np.inf
+    weights[valid] = w
+    sigma_out[valid] = sigma
+    return weights, sigma_out
 
 
 def _dF_with_corner_fallback(features: FeatureSeries, ins_f: InertialSeries, camera: CameraModel) -> np.ndarray:
@@ -266,6 +335,43 @@ def _dF_with_corner_fallback(features: FeatureSeries, ins_f: InertialSeries, cam
         R_cr_level = batch_R_camera_from_runway(ins_f.roll_rad[fill], ins_f.pitch_rad[fill],
                                                 np.zeros(int(fill.sum())), camera.mount_rpy_rad)
         dF[fill] = dF_from_vanishing_point(vp, *horizon_line(R_cr_level), camera)
+    return dF
+
+
+def _dF_on_horizon(features: FeatureSeries, ins_f: InertialSeries, camera: CameraModel) -> np.ndarray:
+    """d_F per frame from where each runway edge crosses the inertial horizon (mean of the two).
+
+    The runway direction is horizontal, so its vanishing point lies on the horizon that the
+    inertial roll and pitch predict (:func:`visland.features.horizon_line`); each edge (the
+    measured line, else the line through its near and far corners) crosses that horizon at the
+    vanishing point, and the mean of the two crossings is measured along the horizon as d_F.
+    Intersecting the two edges with each other instead (the unconstrained vanishing point) divides
+    by their small angle: 5 km out with 5 px of corner noise that ratio is heavy-tailed and biased
+    (per-frame heading errors 50-100 deg, a +2.7 deg median on thesis-4); crossing a known line is
+    linear in the noise. On exact measurements both give the same point. NaN where neither edge
+    pair is measured.
+    """
+    m = len(features)
+    left = np.full((m, 2), np.nan)
+    right = np.full((m, 2), np.nan)
+    ok = features.lines_ok
+    left[ok] = features.lines[ok, 0]
+    right[ok] = features.lines[ok, 1]
+    corners = np.concatenate([features.near_uv_px, features.far_uv_px], axis=1)   # NL, NR, FL, FR
+    fill = ~ok & np.isfinite(corners).all(axis=(1, 2))
+    if fill.any():
+        xy = camera.pixels_to_normalized(corners[fill])
+        left[fill] = np.stack(line_through_points(xy[:, 0], xy[:, 2]), axis=1)
+        right[fill] = np.stack(line_through_points(xy[:, 1], xy[:, 3]), axis=1)
+    dF = np.full(m, np.nan)
+    use = np.isfinite(left).all(axis=1) & np.isfinite(right).all(axis=1)
+    if use.any():
+        R_cr_level = batch_R_camera_from_runway(ins_f.roll_rad[use], ins_f.pitch_rad[use],
+                                                np.zeros(int(use.sum())), camera.mount_rpy_rad)
+        h_rho, h_theta = horizon_line(R_cr_level)
+        vp = 0.5 * (intersect_lines(left[use, 0], left[use, 1], h_rho, h_theta)
+                    + intersect_lines(right[use, 0], right[use, 1], h_rho, h_theta))
+        dF[use] = dF_from_vanishing_point(vp, h_rho, h_theta, camera)
     return dF
 
 
@@ -374,7 +480,8 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
 
     # ---- heading: dpsi per frame from d_F, runway heading as a filtered constant
     dpsi_frame = np.full(len(frame_t), np.nan)
-    dF_px = _dF_with_corner_fallback(features, ins_f, camera)
+    dF_px = _dF_on_horizon(features, ins_f, camera)
+    dF_px = np.where(np.isfinite(dF_px), dF_px, _dF_with_corner_fallback(features, ins_f, camera))
     has_dF = np.isfinite(dF_px)
     if has_dF.any():
         dpsi_frame[has_dF] = dpsi_from_dF(dF_px[has_dF], ins_f.roll_rad[has_dF], ins_f.pitch_rad[has_dF], camera)
@@ -385,10 +492,13 @@ def prepare_inputs(inertial: InertialSeries, features: FeatureSeries, camera: Ca
         vp_dpsi = _dpsi_from_vanishing_point(features, ins_f, batch_R_body_from_camera(
             np.asarray(camera.mount_rpy_rad)[None, :] + mount_error_frame), camera)
         dpsi_frame = np.where(np.isfinite(vp_dpsi), vp_dpsi, dpsi_frame)
-    weights = _heading_weights(features.near_uv_px)
     psi_samples = ins_f.heading_rad - dpsi_frame
+    weights, sample_sigma = _robust_heading_weights(psi_samples)
     psi_rwy_frame = _circular_running_mean(psi_samples, weights)
-    settled = np.maximum.accumulate(_running_standard_error(psi_samples, weights) <= HEADING_SETTLED_RAD)
+    # settled: the mean known to HEADING_SETTLED_RAD and single frames no longer scattering by more
+    # (frames that scatter by degrees are also biased by about as much: _robust_heading_weights)
+    settled = np.maximum.accumulate((_running_standard_error(psi_samples, weights) <= HEADING_SETTLED_RAD)
+                                    & (np.nan_to_num(sample_sigma, nan=np.inf) <= HEADING_SAMPLE_SETTLED_RAD))
     psi_rwy_frame = np.where(settled, psi_rwy_frame, np.nan)
     # value at each step: the estimate from the frames up to that time (hold the last one)
     psi_rwy = np.where(last_frame >= 0, psi_rwy_frame[np.clip(last_frame, 0, None)], np.nan)
