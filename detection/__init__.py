@@ -33,35 +33,27 @@ through the lens with its focal length), so the defaults serve every image size 
 """
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
-from visland.detection.params import DetectorParams      # light: no OpenCV
+from visland.exports import lazy_exports
 
-# The detector pulls in OpenCV and SciPy (0.3-0.4 s, measured as the median of 7 cold imports
-# on the reference machine, against 0.23 s for a whole ``visland scenarios``), and every
-# ``visland`` command imports this package to register ``visland.detection.cli``: the heavy
-# exports load on first use (PEP 562). The imports below are the same names for readers and
-# editors ("go to definition"); they are not executed.
+# Exports load on first use (visland.exports, PEP 562): every ``visland`` command imports this
+# package to register ``visland.detection.cli``, and the detector pulls in OpenCV and SciPy
+# (0.3-0.4 s, median of 7 cold imports on the reference machine, against 0.23 s for a whole
+# ``visland scenarios``), DetectorParams NumPy. The imports below are the same names for
+# readers and editors ("go to definition"); they are not executed.
 if TYPE_CHECKING:
     from visland.detection.detector import detect_runway
+    from visland.detection.params import DetectorParams
     from visland.detection.result import LINE_NAMES, DetectionResult
     from visland.detection.sequence import DetectionSequence
 
 _EXPORTS = {
+    "DetectorParams": "visland.detection.params",
     "detect_runway": "visland.detection.detector",
     "DetectionResult": "visland.detection.result", "LINE_NAMES": "visland.detection.result",
     "DetectionSequence": "visland.detection.sequence",
 }
 
-__all__ = ["DetectorParams", *_EXPORTS]
-
-
-def __getattr__(name):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'visland.detection' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

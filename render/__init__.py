@@ -30,20 +30,24 @@ noise), ``renderer`` (FrameRenderer), ``bench`` (``visland bench render``).
 from __future__ import annotations
 
 import os
+from typing import TYPE_CHECKING
+
+from visland.exports import lazy_exports
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
-from .params import SceneParams  # noqa: E402  (light: no OpenGL)
+# Exports load on first use (visland.exports, PEP 562): FrameRenderer pulls in pyrender and
+# OpenGL. The imports below are the same names for readers and editors; they are not executed.
+if TYPE_CHECKING:
+    from visland.render.glview import RenderingUnavailable
+    from visland.render.params import SceneParams
+    from visland.render.renderer import FrameRenderer
 
-__all__ = ["SceneParams", "FrameRenderer", "RenderingUnavailable"]
+_EXPORTS = {
+    "SceneParams": "visland.render.params",
+    "FrameRenderer": "visland.render.renderer",
+    "RenderingUnavailable": "visland.render.glview",
+}
 
-
-def __getattr__(name):
-    # FrameRenderer pulls in pyrender/OpenGL: import it only when asked for
-    if name == "FrameRenderer":
-        from .renderer import FrameRenderer
-        return FrameRenderer
-    if name == "RenderingUnavailable":
-        from .glview import RenderingUnavailable
-        return RenderingUnavailable
-    raise AttributeError(f"module 'visland.render' has no attribute {name!r}")
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -30,10 +30,11 @@ Modules (each one idea):
 """
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
-# Exports load on first use (PEP 562): ``visland.tracking.cli``, imported by the ``visland``
+from visland.exports import lazy_exports
+
+# Exports load on first use (visland.exports, PEP 562): ``visland.tracking.cli``, imported by the ``visland``
 # command for every subcommand, must not pull in OpenCV and SciPy (0.3-0.4 s against 0.23 s
 # for a whole ``visland scenarios``; see visland.detection). The imports below are the same
 # names for readers and editors ("go to definition"); they are not executed.
@@ -56,13 +57,4 @@ _EXPORTS = {
 }
 
 __all__ = list(_EXPORTS)
-
-
-def __getattr__(name):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'visland.tracking' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 
 def _size(text: str) -> tuple[int, int]:
     parts = text.lower().split("x")
@@ -139,6 +137,7 @@ def _cmd_mask(args) -> int:
     from pathlib import Path
 
     import cv2
+    import numpy as np
 
     from visland.camera import CameraModel
     from visland.footage import sample_footage
