@@ -126,7 +126,7 @@ def detector_anchor_provider(camera, inertial, params=None, track_previous: bool
     Parameters
     ----------
     camera : :class:`visland.camera.CameraModel`
-    inertial : :class:`visland.folder.InertialAtFrames` (roll and pitch at each frame).
+    inertial : :class:`visland.sensors.InertialSeries` (roll and pitch at each frame).
     params : ``visland.detection.DetectorParams`` or None for the defaults.
     track_previous : pass the previous frame's detection to the detector as its prior.
 

@@ -16,44 +16,43 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from visland.camera import CameraModel
 from visland.contracts import Table, read_frames_csv, read_labels, read_telemetry, read_truth
+from visland.sensors import InertialSeries
 
-__all__ = ["FrameFolder", "InertialAtFrames", "IMAGE_SUFFIXES", "as_grey", "pinhole_frame", "scene_frame", "ignored_pixels", "interpolate_telemetry",
+__all__ = ["FrameFolder", "IMAGE_SUFFIXES", "as_grey", "pinhole_frame", "scene_frame", "ignored_pixels", "interpolate_telemetry",
            "list_frame_files"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg")
 
 
-@dataclass
-class InertialAtFrames:
-    """Telemetry interpolated at frame times (SI units, radians)."""
+def interpolate_telemetry(telemetry: Table, times_s, source: str = "telemetry.csv") -> InertialSeries:
+    """The telemetry at the frame times: :meth:`InertialSeries.at` with the frames named.
 
-    t_s: np.ndarray
-    roll_rad: np.ndarray
-    pitch_rad: np.ndarray
-    heading_rad: np.ndarray
-    omega_body_rps: np.ndarray   # (n, 3)
-    v_ned_mps: np.ndarray        # (n, 3)
+    Parameters
+    ----------
+    telemetry : visland.contracts.Table
+        As read by :func:`visland.contracts.read_telemetry` (one row is enough when every frame
+        is at its time).
+    times_s : array_like, shape (n,)
+        Frame times in seconds on the telemetry's clock, strictly increasing.
+    source : str
+        What the telemetry is called in an error (its path).
 
-    def __len__(self):
-        return len(self.t_s)
+    Returns
+    -------
+    visland.sensors.InertialSeries
+        Attitude (radians; roll and heading unwrapped before interpolating), body rates (rad/s),
+        NED ground velocity (m/s) and the true airspeed when recorded, one sample per frame.
 
-    def sample(self, i: int) -> dict:
-        return {"t_s": float(self.t_s[i]), "roll_rad": float(self.roll_rad[i]), "pitch_rad": float(self.pitch_rad[i]),
-                "heading_rad": float(self.heading_rad[i]), "omega_body_rps": self.omega_body_rps[i],
-                "v_ned_mps": self.v_ned_mps[i]}
-
-
-def interpolate_telemetry(telemetry: Table, times_s, source: str = "telemetry.csv") -> InertialAtFrames:
-    """Interpolate telemetry columns linearly at ``times_s`` (angles unwrapped first).
-
-    Raises if the telemetry does not cover every time (naming the first uncovered frame).
+    Raises
+    ------
+    ValueError
+        When the telemetry does not cover every frame time, naming the first uncovered frame.
     """
     times = np.asarray(times_s, dtype=float)
     t = telemetry["t_s"]
@@ -61,17 +60,7 @@ def interpolate_telemetry(telemetry: Table, times_s, source: str = "telemetry.cs
     if outside.size:
         i = int(outside[0])
         raise ValueError(f"{source}: telemetry covers {t[0]:g}..{t[-1]:g} s but frame {i} is at t = {times[i]:g} s")
-
-    def interp(column, angle=False):
-        values = np.radians(telemetry[column]) if angle else telemetry[column]
-        if angle:
-            values = np.unwrap(values)
-        return np.interp(times, t, values)
-
-    omega = np.stack([np.radians(np.interp(times, t, telemetry[c])) for c in ("p_dps", "q_dps", "r_dps")], axis=1)
-    v_ned = np.stack([np.interp(times, t, telemetry[c]) for c in ("vn_mps", "ve_mps", "vd_mps")], axis=1)
-    return InertialAtFrames(t_s=times, roll_rad=interp("roll_deg", True), pitch_rad=interp("pitch_deg", True),
-                            heading_rad=interp("heading_deg", True), omega_body_rps=omega, v_ned_mps=v_ned)
+    return InertialSeries.from_table(telemetry, min_samples=1).at(times, min_samples=1)
 
 
 def list_frame_files(frames_dir: Path) -> list[Path]:

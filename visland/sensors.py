@@ -18,7 +18,7 @@ wind is observable (``dickmanns-4d``); ``airspeed=False`` leaves the column out.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import InitVar, dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -69,11 +69,30 @@ class ImuParams:
 class InertialSeries:
     """Inertial data at the unit's rate, SI units (radians, rad/s, m/s): the one record of
     inertial samples, whether simulated (:func:`measure_imu`), read from ``telemetry.csv``
-    (:meth:`from_table`) or interpolated at frame times (:meth:`at`).
+    (:meth:`from_table`) or interpolated at frame times (:meth:`at`,
+    :func:`visland.folder.interpolate_telemetry`).
 
-    Attributes: ``t_s (n,)``, ``roll_rad``, ``pitch_rad``, ``heading_rad (n,)`` (unwrapped),
-    ``omega_body_rps (n, 3)`` body rates (p, q, r), ``v_ned_mps (n, 3)`` ground velocity, and
-    optionally ``tas_mps (n,)`` the true airspeed (None when the telemetry has no ``tas_mps``).
+    Parameters
+    ----------
+    t_s : ndarray, shape (n,)
+        Sample times in seconds, strictly increasing.
+    roll_rad, pitch_rad, heading_rad : ndarray, shape (n,)
+        Body attitude relative to NED in radians (roll and true heading unwrapped).
+    omega_body_rps : ndarray, shape (n, 3)
+        Body rates (p, q, r) in rad/s, body frame.
+    v_ned_mps : ndarray, shape (n, 3)
+        Ground velocity in m/s, NED frame.
+    tas_mps : ndarray, shape (n,), optional
+        True airspeed in m/s (None when the telemetry has no ``tas_mps`` column).
+    min_samples : int, default 2
+        Fewest samples accepted: 2 for a series to interpolate from (telemetry, IMU), 1 for
+        values at the frames of a one-frame recording. Not stored.
+
+    Raises
+    ------
+    ValueError
+        A shape that is not (n,) or (n, 3), a NaN or infinite value, a non-positive airspeed,
+        or times that do not increase strictly over ``min_samples`` samples.
     """
 
     t_s: np.ndarray
@@ -83,8 +102,9 @@ class InertialSeries:
     omega_body_rps: np.ndarray
     v_ned_mps: np.ndarray
     tas_mps: np.ndarray | None = None
+    min_samples: InitVar[int] = 2
 
-    def __post_init__(self):
+    def __post_init__(self, min_samples: int = 2):
         n = len(self.t_s)
         if self.tas_mps is not None:
             tas = np.asarray(self.tas_mps, dtype=float)
@@ -106,18 +126,31 @@ class InertialSeries:
             if not np.isfinite(values).all():
                 raise ValueError(f"telemetry: {name} holds a NaN or infinite value")
             setattr(self, name, values)
-        if n < 2 or np.any(np.diff(self.t_s) <= 0):
-            raise ValueError("telemetry: time must increase strictly over at least two samples")
+        if n < min_samples or np.any(np.diff(self.t_s) <= 0):
+            raise ValueError("telemetry: time must increase strictly over at least two samples" if min_samples == 2
+                             else f"telemetry: time must increase strictly over at least {min_samples} sample(s)")
 
     @classmethod
-    def from_table(cls, table: "Table") -> "InertialSeries":
-        """From a ``telemetry.csv`` table (:func:`visland.contracts.read_telemetry`)."""
+    def from_table(cls, table: "Table", min_samples: int = 2) -> "InertialSeries":
+        """From a ``telemetry.csv`` table, degrees to radians, roll and heading unwrapped.
+
+        Parameters
+        ----------
+        table : visland.contracts.Table
+            As read by :func:`visland.contracts.read_telemetry` (SPEC columns and units).
+        min_samples : int, default 2
+            Fewest rows accepted (see the class).
+
+        Returns
+        -------
+        InertialSeries
+        """
         return cls(t_s=table["t_s"], roll_rad=np.unwrap(np.radians(table["roll_deg"])),
                    pitch_rad=np.radians(table["pitch_deg"]),
                    heading_rad=np.unwrap(np.radians(table["heading_deg"])),
                    omega_body_rps=np.radians(np.stack([table["p_dps"], table["q_dps"], table["r_dps"]], axis=1)),
                    v_ned_mps=np.stack([table["vn_mps"], table["ve_mps"], table["vd_mps"]], axis=1),
-                   tas_mps=table["tas_mps"] if "tas_mps" in table else None)
+                   tas_mps=table["tas_mps"] if "tas_mps" in table else None, min_samples=min_samples)
 
     @classmethod
     def from_imu(cls, imu: "InertialSeries") -> "InertialSeries":
@@ -126,8 +159,22 @@ class InertialSeries:
                    heading_rad=np.unwrap(imu.heading_rad), omega_body_rps=imu.omega_body_rps,
                    v_ned_mps=imu.v_ned_mps, tas_mps=imu.tas_mps)
 
-    def at(self, times_s) -> "InertialSeries":
-        """Linear interpolation at ``times_s`` (inside the covered span)."""
+    def at(self, times_s, min_samples: int = 2) -> "InertialSeries":
+        """Linear interpolation at ``times_s`` (inside the covered span).
+
+        Parameters
+        ----------
+        times_s : array_like, shape (m,)
+            Times in seconds, strictly increasing, within ``t_s[0] .. t_s[-1]`` (to
+            :data:`TIME_MATCH_S`).
+        min_samples : int, default 2
+            Fewest times accepted (1 for the frames of a one-frame recording).
+
+        Returns
+        -------
+        InertialSeries
+            The samples at ``times_s`` (angles interpolated unwrapped).
+        """
         times = np.asarray(times_s, dtype=float)
         if times.size and (times.min() < self.t_s[0] - TIME_MATCH_S or times.max() > self.t_s[-1] + TIME_MATCH_S):
             raise ValueError(f"telemetry covers {self.t_s[0]:g}..{self.t_s[-1]:g} s but the measurements span "
@@ -140,7 +187,7 @@ class InertialSeries:
 
         return InertialSeries(times, interp(self.roll_rad), interp(self.pitch_rad), interp(self.heading_rad),
                               interp(self.omega_body_rps), interp(self.v_ned_mps),
-                              None if self.tas_mps is None else interp(self.tas_mps))
+                              None if self.tas_mps is None else interp(self.tas_mps), min_samples=min_samples)
 
     @property
     def columns_written(self) -> tuple:

@@ -76,3 +76,44 @@ def test_airspeed_is_the_air_velocity_magnitude_with_seeded_noise():
     assert measure_imu(trajectory, ImuParams(airspeed=False)).tas_mps is None
     with pytest.raises(ValueError, match="airspeed_noise_mps"):
         ImuParams(airspeed_noise_mps=-1.0)
+
+
+def _telemetry_table(t_s, heading_deg, tas=None):
+    from pathlib import Path
+
+    from visland.contracts import Table
+    t_s = np.asarray(t_s, float)
+    n = len(t_s)
+    columns = {"t_s": t_s, "roll_deg": np.linspace(-2.0, 2.0, n), "pitch_deg": np.full(n, -3.0),
+               "heading_deg": np.asarray(heading_deg, float), "p_dps": np.full(n, 1.0), "q_dps": np.zeros(n),
+               "r_dps": np.zeros(n), "vn_mps": np.full(n, 70.0), "ve_mps": np.zeros(n), "vd_mps": np.full(n, 3.5)}
+    if tas is not None:
+        columns["tas_mps"] = np.asarray(tas, float)
+    return Table(columns, Path("telemetry.csv"), list(columns))
+
+
+def test_telemetry_at_frame_times_is_the_one_inertial_record():
+    from visland.folder import interpolate_telemetry
+    from visland.sensors import InertialSeries
+    # heading crosses north between samples: 359 -> 1 deg is +2 deg, halfway is 360 (0), not 180
+    table = _telemetry_table([0.0, 1.0, 2.0], [358.0, 359.0, 1.0], tas=[70.0, 71.0, 72.0])
+    at_frames = interpolate_telemetry(table, [0.5, 1.5])
+    assert isinstance(at_frames, InertialSeries)
+    np.testing.assert_allclose(np.degrees(at_frames.heading_rad) % 360.0, [358.5, 0.0], atol=1e-9)
+    np.testing.assert_allclose(np.degrees(at_frames.roll_rad), [-1.0, 1.0], atol=1e-12)
+    np.testing.assert_allclose(at_frames.omega_body_rps[:, 0], math.radians(1.0))
+    np.testing.assert_allclose(at_frames.v_ned_mps, [[70.0, 0.0, 3.5]] * 2)
+    np.testing.assert_allclose(at_frames.tas_mps, [70.5, 71.5])
+
+
+def test_one_frame_at_a_one_row_telemetry_is_accepted():
+    from visland.folder import interpolate_telemetry
+    at_frames = interpolate_telemetry(_telemetry_table([2.0], [90.0]), [2.0])
+    np.testing.assert_allclose(np.degrees(at_frames.heading_rad), [90.0])
+    assert at_frames.tas_mps is None
+
+
+def test_a_frame_outside_the_telemetry_is_named():
+    from visland.folder import interpolate_telemetry
+    with pytest.raises(ValueError, match=r"^flight.csv: telemetry covers 0..2 s but frame 1 is at t = 2.5 s$"):
+        interpolate_telemetry(_telemetry_table([0.0, 1.0, 2.0], [0.0, 0.0, 0.0]), [1.0, 2.5], source="flight.csv")
