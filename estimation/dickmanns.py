@@ -93,6 +93,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from scipy.linalg.lapack import dposv as _dposv
 
 from visland.estimation.base import Estimate, Observer, ObserverInput, ObserverParams, clip_eta
 from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M, Deviations, deviations_from_lines
@@ -206,12 +207,17 @@ def rotation_correction(ax: float, ay: float, az: float) -> np.ndarray:
     ``Rx' = Rx [e_x]x``: ``dA/daz = [e_z]x A``, ``dA/dax = A [e_x]x``,
     ``dA/day = A [Rx^T e_y]x``.
     """
+    return np.array(_rotation_rows(ax, ay, az))
+
+
+def _rotation_rows(ax: float, ay: float, az: float) -> tuple:
+    """The rows of :func:`rotation_correction` as tuples of floats (the filter's inner loop)."""
     cx, sx = math.cos(ax), math.sin(ax)
     cy, sy = math.cos(ay), math.sin(ay)
     cz, sz = math.cos(az), math.sin(az)
-    return np.array([[cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx],
-                     [sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx],
-                     [-sy, cy * sx, cy * cx]])
+    return ((cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx),
+            (sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx),
+            (-sy, cy * sx, cy * cx))
 
 
 def line_normals_runway(xi: float, zeta: float, omega: float) -> np.ndarray:
@@ -272,57 +278,90 @@ def predict_vision(state, R_runway_from_camera, with_threshold: bool) -> tuple:
     (``R_in = R_runway_from_camera``). With ``m_A = A^T m``: ``dm_C/dax = -R_in^T (e_x x m_A)``,
     ``dm_C/day = -R_in^T (u x m_A)`` with ``u = (0, cos ax, -sin ax)``, and
     ``dm_C/daz = -R_in^T A^T (e_z x m)``; ``dm_C/dq = (R_in^T A^T e_z) dm_z/dq`` for the ratios q.
-    (Written on Python floats: a handful of 3-vectors per frame, where numpy's per-call cost
-    would dominate the 50 Hz budget.)
     """
-    s = state
     rows = (0, 1, 2, 3) if with_threshold else (0, 1, 3)
-    normals = line_normals_runway(s[_XI], s[_ZETA], s[_OMEGA]).tolist()
-    A = rotation_correction(s[_AX], s[_AY], s[_AZ]).tolist()
-    R = np.asarray(R_runway_from_camera).tolist()
-    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = A
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
-    ca, sa = math.cos(s[_AX]), math.sin(s[_AX])
-
-    def to_camera(v0, v1, v2):                            # R_in^T v
-        return (r00 * v0 + r10 * v1 + r20 * v2, r01 * v0 + r11 * v1 + r21 * v2, r02 * v0 + r12 * v1 + r22 * v2)
-
-    def a_transpose(v0, v1, v2):                          # A^T v
-        return (a00 * v0 + a10 * v1 + a20 * v2, a01 * v0 + a11 * v1 + a21 * v2, a02 * v0 + a12 * v1 + a22 * v2)
-
-    ez_c = to_camera(a20, a21, a22)                       # R_in^T A^T e_z
-    z = []
     H = np.zeros((2 * len(rows), N_STATES))
+    s = state.tolist() if isinstance(state, np.ndarray) else [float(v) for v in state]
+    z, M_C, _ = _vision_rows(s, np.asarray(R_runway_from_camera, dtype=float).tolist(), rows, H, 0)
+    return np.array(z), H, M_C
+
+
+def _vision_rows(s, R, rows, H, row0: int) -> tuple:
+    """Body of :func:`predict_vision` on Python floats, writing its Jacobian into ``H[row0:]``.
+
+    ``s`` the state as a list of floats, ``R`` the rows of ``R_runway_from_camera``, ``rows`` the
+    lines wanted (indices into :func:`line_normals_runway`). Returns ``(z, M_C, M)``: the predicted
+    ``(theta, rho)`` flattened, the camera-axes normals, and the columns of ``M = R_in^T A^T``
+    (the runway axes as the corrected camera sees them; reused by the lines' noise). A handful of
+    3-vectors per frame: on floats, where numpy's per-call cost would dominate the 50 Hz budget.
+
+    Every normal of :func:`line_normals_runway` is a fixed combination of the runway axes, so
+    ``m_C = M m`` is built from the columns ``M e_x, M e_y, M e_z``: the edges ``M e_y + m_z M e_z``,
+    the threshold ``-M e_x - xi M e_z``, the horizon ``M e_z``; and ``dm_C/daz = M (e_z x m)``
+    with the sign of the docstring above is ``M e_x`` for an edge, ``M e_y`` for the threshold and 0
+    for the horizon.
+    """
+    xi, zeta, omega, ax = s[_XI], s[_ZETA], s[_OMEGA], s[_AX]
+    (a00, a01, a02), (a10, a11, a12), (a20, a21, a22) = _rotation_rows(ax, s[_AY], s[_AZ])
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
+    ca, sa = math.cos(ax), math.sin(ax)
+    # columns of M = R_in^T A^T (A^T e_x is A's first row)
+    mx0, mx1, mx2 = r00 * a00 + r10 * a01 + r20 * a02, r01 * a00 + r11 * a01 + r21 * a02, r02 * a00 + r12 * a01 + r22 * a02
+    my0, my1, my2 = r00 * a10 + r10 * a11 + r20 * a12, r01 * a10 + r11 * a11 + r21 * a12, r02 * a10 + r12 * a11 + r22 * a12
+    mz0, mz1, mz2 = r00 * a20 + r10 * a21 + r20 * a22, r01 * a20 + r11 * a21 + r21 * a22, r02 * a20 + r12 * a21 + r22 * a22
+    z = []
     M_C = []
-    for k, row in enumerate(rows):
-        m0, m1, m2 = normals[row]
-        ma0, ma1, ma2 = a_transpose(m0, m1, m2)
-        c0, c1, c2 = to_camera(ma0, ma1, ma2)
+    i = row0
+    for row in rows:
+        if row < 2:                                                       # edges: m = (0, 1, m_z)
+            mz = zeta + 0.5 * omega if row == 0 else zeta - 0.5 * omega
+            ma0, ma1, ma2 = a10 + a20 * mz, a11 + a21 * mz, a12 + a22 * mz  # m_A = A^T m
+            c0, c1, c2 = my0 + mz * mz0, my1 + mz * mz1, my2 + mz * mz2
+            dz0, dz1, dz2 = mx0, mx1, mx2
+        elif row == 2:                                                    # threshold: m = (-1, 0, -xi)
+            ma0, ma1, ma2 = -a00 - a20 * xi, -a01 - a21 * xi, -a02 - a22 * xi
+            c0, c1, c2 = -mx0 - xi * mz0, -mx1 - xi * mz1, -mx2 - xi * mz2
+            dz0, dz1, dz2 = my0, my1, my2
+        else:                                                             # horizon: m = e_z
+            ma0, ma1, ma2 = a20, a21, a22
+            c0, c1, c2 = mz0, mz1, mz2
+            dz0 = dz1 = dz2 = 0.0
         M_C.append((c0, c1, c2))
         h2 = c0 * c0 + c1 * c1
         h = math.sqrt(h2)
         h3 = h2 * h
-        z += [math.atan2(c1, c0), -c2 / h]
+        z.append(math.atan2(c1, c0))
+        z.append(-c2 / h)
         # Jacobian of (theta, rho) in m_C (line_from_normal)
         jt0, jt1 = -c1 / h2, c0 / h2
         jr0, jr1, jr2 = c2 * c0 / h3, c2 * c1 / h3, -1.0 / h
-        d_ax = to_camera(0.0, ma2, -ma1)                  # -R_in^T (e_x x m_A)
-        d_ay = to_camera(-(ca * ma2 + sa * ma1), sa * ma0, ca * ma0)
-        d_az = to_camera(*a_transpose(m1, -m0, 0.0))     # -R_in^T A^T (e_z x m)
-        i = 2 * k
-        for col, d in ((_AX, d_ax), (_AY, d_ay), (_AZ, d_az)):
-            H[i, col] = jt0 * d[0] + jt1 * d[1]
-            H[i + 1, col] = jr0 * d[0] + jr1 * d[1] + jr2 * d[2]
-        g_t = jt0 * ez_c[0] + jt1 * ez_c[1]
-        g_r = jr0 * ez_c[0] + jr1 * ez_c[1] + jr2 * ez_c[2]
-        dxi, dzeta, domega = _DMZ[row]
-        if dxi:
-            H[i, _XI], H[i + 1, _XI] = g_t * dxi, g_r * dxi
-        if dzeta:
-            H[i, _ZETA], H[i + 1, _ZETA] = g_t * dzeta, g_r * dzeta
-        if domega:
-            H[i, _OMEGA], H[i + 1, _OMEGA] = g_t * domega, g_r * domega
-    return np.array(z), H, M_C
+        # dm_C/dax = -R_in^T (e_x x m_A) = R_in^T (0, ma2, -ma1)
+        d0 = r10 * ma2 - r20 * ma1
+        d1 = r11 * ma2 - r21 * ma1
+        d2 = r12 * ma2 - r22 * ma1
+        H[i, _AX] = jt0 * d0 + jt1 * d1
+        H[i + 1, _AX] = jr0 * d0 + jr1 * d1 + jr2 * d2
+        # dm_C/day = -R_in^T (u x m_A), u = (0, cos ax, -sin ax)
+        u0, u1, u2 = -(ca * ma2 + sa * ma1), sa * ma0, ca * ma0
+        d0 = r00 * u0 + r10 * u1 + r20 * u2
+        d1 = r01 * u0 + r11 * u1 + r21 * u2
+        d2 = r02 * u0 + r12 * u1 + r22 * u2
+        H[i, _AY] = jt0 * d0 + jt1 * d1
+        H[i + 1, _AY] = jr0 * d0 + jr1 * d1 + jr2 * d2
+        if row != 3:                                                      # dm_C/daz
+            H[i, _AZ] = jt0 * dz0 + jt1 * dz1
+            H[i + 1, _AZ] = jr0 * dz0 + jr1 * dz1 + jr2 * dz2
+            # dm_C/dq = M e_z dm_z/dq for the ratios q (_DMZ)
+            g_t = jt0 * mz0 + jt1 * mz1
+            g_r = jr0 * mz0 + jr1 * mz1 + jr2 * mz2
+            if row == 2:
+                H[i, _XI], H[i + 1, _XI] = -g_t, -g_r
+            else:
+                H[i, _ZETA], H[i + 1, _ZETA] = g_t, g_r
+                half = 0.5 if row == 0 else -0.5
+                H[i, _OMEGA], H[i + 1, _OMEGA] = g_t * half, g_r * half
+        i += 2
+    return z, M_C, ((mx0, mx1, mx2), (my0, my1, my2), (mz0, mz1, mz2))
 
 
 def predict_ins_velocity(state) -> tuple:
@@ -331,13 +370,18 @@ def predict_ins_velocity(state) -> tuple:
     The input turns the NED velocity into runway axes with the estimated runway heading; ``az`` is
     that heading's error, so the true runway-axes velocity is ``Rz(az)`` times the input's.
     """
-    vx, vy, vz, az = state[_VX], state[_VY], state[_VZ], state[_AZ]
-    c, s = math.cos(az), math.sin(az)
     H = np.zeros((3, N_STATES))
-    H[0, _VX], H[0, _VY], H[0, _AZ] = c, s, -s * vx + c * vy
-    H[1, _VX], H[1, _VY], H[1, _AZ] = -s, c, -c * vx - s * vy
-    H[2, _VZ] = 1.0
-    return np.array([c * vx + s * vy, -s * vx + c * vy, vz]), H
+    return np.array(_ins_velocity_rows([float(v) for v in state], H, 0)), H
+
+
+def _ins_velocity_rows(s, H, i: int) -> list:
+    """Body of :func:`predict_ins_velocity` on floats: Jacobian into ``H[i:i+3]``, returns the 3 values."""
+    vx, vy, vz, az = s[_VX], s[_VY], s[_VZ], s[_AZ]
+    c, sn = math.cos(az), math.sin(az)
+    H[i, _VX], H[i, _VY], H[i, _AZ] = c, sn, -sn * vx + c * vy
+    H[i + 1, _VX], H[i + 1, _VY], H[i + 1, _AZ] = -sn, c, -c * vx - sn * vy
+    H[i + 2, _VZ] = 1.0
+    return [c * vx + sn * vy, -sn * vx + c * vy, vz]
 
 
 def predict_air_data(state, body_y_runway_in) -> tuple:
@@ -347,18 +391,24 @@ def predict_air_data(state, body_y_runway_in) -> tuple:
     ``u . a = 0`` with ``u = Rz(az) e_yB`` the body y axis in the true runway axes
     (``body_y_runway_in``: the same axis in the input's runway axes, from the inertial attitude).
     """
-    a0, a1, a2 = state[_VX] - state[_WX], state[_VY] - state[_WY], state[_VZ]
-    speed = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
-    c, s = math.cos(state[_AZ]), math.sin(state[_AZ])
-    e0, e1, e2 = (float(v) for v in body_y_runway_in)
-    u0, u1 = c * e0 - s * e1, s * e0 + c * e1
     H = np.zeros((2, N_STATES))
-    H[0, _VX], H[0, _VY], H[0, _VZ] = a0 / speed, a1 / speed, a2 / speed
-    H[0, _WX], H[0, _WY] = -a0 / speed, -a1 / speed
-    H[1, _VX], H[1, _VY], H[1, _VZ] = u0, u1, e2
-    H[1, _WX], H[1, _WY] = -u0, -u1
-    H[1, _AZ] = -u1 * a0 + u0 * a1                       # (dRz/daz e) . a
-    return np.array([speed, u0 * a0 + u1 * a1 + e2 * a2]), H
+    z = _air_data_rows([float(v) for v in state], tuple(float(v) for v in body_y_runway_in), H, 0)
+    return np.array(z), H
+
+
+def _air_data_rows(s, body_y_runway_in, H, i: int) -> list:
+    """Body of :func:`predict_air_data` on floats: Jacobian into ``H[i:i+2]``, returns the 2 values."""
+    a0, a1, a2 = s[_VX] - s[_WX], s[_VY] - s[_WY], s[_VZ]
+    speed = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    c, sn = math.cos(s[_AZ]), math.sin(s[_AZ])
+    e0, e1, e2 = body_y_runway_in
+    u0, u1 = c * e0 - sn * e1, sn * e0 + c * e1
+    H[i, _VX], H[i, _VY], H[i, _VZ] = a0 / speed, a1 / speed, a2 / speed
+    H[i, _WX], H[i, _WY] = -a0 / speed, -a1 / speed
+    H[i + 1, _VX], H[i + 1, _VY], H[i + 1, _VZ] = u0, u1, e2
+    H[i + 1, _WX], H[i + 1, _WY] = -u0, -u1
+    H[i + 1, _AZ] = -u1 * a0 + u0 * a1                       # (dRz/daz e) . a
+    return [speed, u0 * a0 + u1 * a1 + e2 * a2]
 
 
 def state_derivative(state, omega_runway_rps, with_wind: bool = True) -> list:
@@ -451,11 +501,20 @@ def _aligned(theta: float, rho: float, theta_ref: float) -> tuple:
     return theta, rho
 
 
-def _threshold_points(points_yv, R_runway_from_camera) -> np.ndarray:
-    """Normalised image points of P' and P'' back from their virtual coordinates (thesis 3.23)."""
-    rays_R = np.array([[points_yv[0, 0], points_yv[0, 1], 1.0], [points_yv[1, 0], points_yv[1, 1], 1.0]])
-    rays_C = rays_R @ np.asarray(R_runway_from_camera)          # R^T ray, row-wise
-    return rays_C[:, :2] / rays_C[:, 2:3]
+def _threshold_points(points_yv, R_runway_from_camera) -> tuple:
+    """Normalised image points ``((x, y), (x, y))`` of P' and P'' back from their virtual coordinates
+    (thesis 3.23): the ray ``(y_v1, y_v2, 1)`` in runway axes turned into the camera, ``R^T ray``."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R_runway_from_camera
+    out = []
+    for y1, y2 in points_yv.tolist():
+        c2 = r02 * y1 + r12 * y2 + r22
+        out.append(((r00 * y1 + r10 * y2 + r20) / c2, (r01 * y1 + r11 * y2 + r21) / c2))
+    return out
+
+
+def _theta_rho(m0: float, m1: float, m2: float) -> tuple:
+    """``(theta, rho)`` of :func:`line_from_normal` without its Jacobian (floats)."""
+    return math.atan2(m1, m0), -m2 / math.sqrt(m0 * m0 + m1 * m1)
 
 
 # --------------------------------------------------------------------------- the filter
@@ -603,10 +662,9 @@ class Dickmanns4D(Observer):
         x = self._x.tolist()
         wind = self._with_wind
         k1 = state_derivative(x, self._omega_prev, wind)
-        mid = [x[i] + dt_s * k1[i] for i in range(N_STATES)]
-        k2 = state_derivative(mid, omega1, wind)
+        k2 = state_derivative([a + dt_s * b for a, b in zip(x, k1)], omega1, wind)
         h = 0.5 * dt_s
-        x = [x[i] + h * (k1[i] + k2[i]) for i in range(N_STATES)]
+        x = [a + h * (b + c) for a, b, c in zip(x, k1, k2)]
         x[_ETA] = clip_eta(x[_ETA])
         self._x = np.array(x)
         self._omega_prev = omega1
@@ -643,92 +701,94 @@ class Dickmanns4D(Observer):
 
     def _update(self, inp: ObserverInput, measurement) -> None:
         p = self.params
-        x = self._x
-        z_parts, h_parts, H_parts, r_diag = [], [], [], []
-        h, H = predict_ins_velocity(x)                                  # inertial ground velocity
-        z_parts.append(inp.v_runway_mps)
-        h_parts.append(h)
-        H_parts.append(H)
-        r_diag += [p.velocity_sigma_mps ** 2] * 3
+        s = self._x.tolist()
         tas = inp.tas_mps
-        if self._with_wind and math.isfinite(tas):                     # air data
-            h, H = predict_air_data(x, _body_y_runway(inp))
-            z_parts.append(np.array([tas, 0.0]))
-            h_parts.append(h)
-            H_parts.append(H)
-            r_diag += [p.airspeed_sigma_mps ** 2, (p.sideslip_sigma_rad * tas) ** 2]
-        n_diag = len(r_diag)
-        R_vision = None
-        if measurement is not None:                                     # image lines
-            R_rc = inp.R_runway_from_camera
-            with_threshold = inp.points_yv is not None and bool(np.isfinite(inp.points_yv).all())
-            h, H, M_C = predict_vision(x, R_rc, with_threshold)
+        with_air = self._with_wind and math.isfinite(tas)
+        with_vision = measurement is not None
+        with_threshold = with_vision and inp.points_yv is not None and bool(np.isfinite(inp.points_yv).all())
+        n_diag = 5 if with_air else 3
+        m_total = n_diag + ((8 if with_threshold else 6) if with_vision else 0)
+        H = np.zeros((m_total, N_STATES))
+        R = np.zeros((m_total, m_total))
+        # inertial ground velocity
+        h = _ins_velocity_rows(s, H, 0)
+        v = inp.v_runway_mps.tolist()
+        innovation = [v[0] - h[0], v[1] - h[1], v[2] - h[2]]
+        r_v = p.velocity_sigma_mps ** 2
+        R[0, 0] = R[1, 1] = R[2, 2] = r_v
+        if with_air:                                                    # air data
+            h = _air_data_rows(s, _body_y_runway(inp), H, 3)
+            innovation += [tas - h[0], 0.0 - h[1]]
+            R[3, 3] = p.airspeed_sigma_mps ** 2
+            R[4, 4] = (p.sideslip_sigma_rad * tas) ** 2
+        if with_vision:                                                 # image lines
+            R_rc = inp.R_runway_from_camera.tolist()
+            rows = (0, 1, 2, 3) if with_threshold else (0, 1, 3)
+            h, M_C, M = _vision_rows(s, R_rc, rows, H, n_diag)
             z = [0.0] * len(h)
             for k in range(2):
                 z[2 * k], z[2 * k + 1] = _aligned(float(measurement[k, 1]), float(measurement[k, 0]), h[2 * k])
             k = 2
             if with_threshold:
-                (a0, a1), (b0, b1) = _threshold_points(inp.points_yv, R_rc).tolist()
-                (theta, rho), _ = line_from_normal((a1 - b1, b0 - a0, a0 * b1 - a1 * b0))
+                (a0, a1), (b0, b1) = _threshold_points(inp.points_yv, R_rc)
+                theta, rho = _theta_rho(a1 - b1, b0 - a0, a0 * b1 - a1 * b0)
                 z[4], z[5] = _aligned(theta, rho, h[4])
                 k = 3
-            (theta, rho), _ = line_from_normal(R_rc[2])               # horizon of the inertial attitude (level down axis)
+            theta, rho = _theta_rho(*R_rc[2])                         # horizon of the inertial attitude (level down axis)
             z[2 * k], z[2 * k + 1] = _aligned(theta, rho, h[2 * k])
-            R_vision = self._vision_covariance(x, R_rc, M_C, with_threshold)
-            z_parts.append(np.array(z))
-            h_parts.append(h)
-            H_parts.append(H)
+            innovation += [z[i] - h[i] for i in range(len(h))]
+            self._vision_covariance(s, M, M_C, with_threshold, R, n_diag)
             # thesis 3.40 on the predicted edges (the line observers' index)
-            self._observability = float(pair_observability(h[:4].tolist(), inputs_of(inp)))
-        innovation = np.concatenate(z_parts) - np.concatenate(h_parts)
-        H_all = np.vstack(H_parts)
-        m_total = len(innovation)
-        R = np.zeros((m_total, m_total))
-        R[range(n_diag), range(n_diag)] = r_diag
-        if R_vision is not None:
-            R[n_diag:, n_diag:] = R_vision
-        # Kalman update (Maybeck, the seed's [8]): K = P H^T S^-1, P <- P - K S K^T
+            self._observability = float(pair_observability(h[:4], inputs_of(inp)))
+        # Kalman update (Maybeck, the seed's [8]): K = P H^T S^-1, P <- P - K S K^T; S is symmetric
+        # positive definite, so its Cholesky factor solves for K^T (LAPACK dposv: a third of the
+        # time numpy.linalg.solve takes on 13 x 13, most of which is call overhead)
         P = self._P
-        PHt = P @ H_all.T
-        S = H_all @ PHt + R
-        K = np.linalg.solve(S, PHt.T).T
-        x = x + K @ innovation
+        PHt = P @ H.T
+        S = H @ PHt
+        S += R
+        _, Kt, info = _dposv(S, PHt.T)
+        if info != 0:                                                   # not positive definite: LU
+            Kt = np.linalg.solve(S, PHt.T)
+        x = self._x + np.dot(innovation, Kt)
         x[_ETA] = clip_eta(float(x[_ETA]))
         self._x = x
-        P = P - K @ PHt.T
+        P = P - PHt @ Kt
         self._P = 0.5 * (P + P.T)
 
-    def _vision_covariance(self, x, R_rc, M_C, with_threshold: bool) -> np.ndarray:
-        """R of the vision block: each runway line through two image points (module docstring, 5)."""
+    def _vision_covariance(self, s, M, M_C, with_threshold: bool, R, i0: int) -> None:
+        """R of the vision block, written into ``R[i0:, i0:]``: each runway line through two image
+        points (module docstring, 5). ``s`` the state (floats), ``M`` the columns of
+        ``R_in^T A^T`` (:func:`_vision_rows`)."""
         p = self.params
         sigma = p.image_sigma_rad
-        A = rotation_correction(x[_AX], x[_AY], x[_AZ])
-        R_cr = (A @ R_rc).T.tolist()
-        xi, zeta, omega, eta = float(x[_XI]), float(x[_ZETA]), float(x[_OMEGA]), float(x[_ETA])
-        n = 6 if with_threshold else 4
-        R = np.zeros((n + 2, n + 2))
+        (mx0, mx1, mx2), (my0, my1, my2), (mz0, mz1, mz2) = M
+        xi, zeta, omega, eta = s[_XI], s[_ZETA], s[_OMEGA], s[_ETA]
 
-        def image_point(d0, d1, d2):               # a direction in runway axes -> normalised image point
-            c = [r[0] * d0 + r[1] * d1 + r[2] * d2 for r in R_cr]
-            return (c[0] / c[2], c[1] / c[2]) if c[2] > 1e-9 else None
+        def image_point(d0, d1):                  # the runway-axes direction (d0, d1, 1) -> normalised image point
+            c2 = d0 * mx2 + d1 * my2 + mz2
+            if c2 <= 1e-9:
+                return None
+            return (d0 * mx0 + d1 * my0 + mz0) / c2, (d0 * mx1 + d1 * my1 + mz1) / c2
 
         # the threshold corners and the points noise_edge_length_m along each edge, seen from the
         # camera (runway-axes directions divided by H)
         far_x = p.noise_edge_length_m * eta - xi
-        near = [image_point(-xi, side * 0.5 * omega - zeta, 1.0) for side in (-1.0, 1.0)]
-        far = [image_point(far_x, side * 0.5 * omega - zeta, 1.0) for side in (-1.0, 1.0)]
-        blocks = [(near[0], far[0], M_C[0]), (near[1], far[1], M_C[1])]
+        left, right = -0.5 * omega - zeta, 0.5 * omega - zeta
+        near_left = image_point(-xi, left)
+        near_right = image_point(-xi, right)
+        blocks = [(near_left, image_point(far_x, left), M_C[0]), (near_right, image_point(far_x, right), M_C[1])]
         if with_threshold:
-            blocks.append((near[0], near[1], M_C[2]))
-        for k, (a, b, m) in enumerate(blocks):
-            i = 2 * k
+            blocks.append((near_left, near_right, M_C[2]))
+        i = i0
+        for a, b, m in blocks:
             if a is None or b is None:
                 R[i, i] = R[i + 1, i + 1] = 1e2
-                continue
-            R[i, i], R[i, i + 1], R[i + 1, i + 1] = segment_line_covariance(a, b, m, sigma)
-            R[i + 1, i] = R[i, i + 1]
-        R[n, n] = R[n + 1, n + 1] = p.horizon_sigma_rad ** 2
-        return R
+            else:
+                R[i, i], R[i, i + 1], R[i + 1, i + 1] = segment_line_covariance(a, b, m, sigma)
+                R[i + 1, i] = R[i, i + 1]
+            i += 2
+        R[i, i] = R[i + 1, i + 1] = p.horizon_sigma_rad ** 2
 
     # ---- for the detector: the lines this filter expects in a frame
     def predicted_lines(self, inp: ObserverInput) -> dict:
