@@ -110,7 +110,14 @@ def _cmd_fly(args) -> int:
 
 
 def register(subparsers):
-    """Add this stage's commands to the visland parser."""
+    """Add this stage's commands to the visland parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
+        command added sets ``func``, called with the parsed arguments, returning the exit status.
+    """
     p = subparsers.add_parser(
         "fly", help="closed loop: the autopilot flies on the vision estimates, flares and lands (one JSON line)",
         description="Fly a scenario with the ILS laws fed by an observer's estimates (dY, dGS, dpsi) instead of the "

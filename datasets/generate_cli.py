@@ -14,7 +14,14 @@ def _positive_int(text):
 
 
 def register(subparsers) -> None:
-    """Add ``generate`` to the visland parser."""
+    """Add ``generate`` to the visland parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
+        command added sets ``func``, called with the parsed arguments, returning the exit status.
+    """
     from visland.cli import add_simulation_arguments
     p = subparsers.add_parser(
         "generate", help="simulate, render every frame and write a dataset (frames + labels + telemetry)",
@@ -73,7 +80,19 @@ def register(subparsers) -> None:
 
 
 def scene_from_args(args):
-    """SceneParams from ``--scene`` and the individual scene options."""
+    """SceneParams from ``--scene`` and the individual scene options.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``visland generate`` arguments: ``--scene``, ``--flat``, ``--scene-seed`` (else
+        ``--seed``), ``--variety`` and each scene option given (None = the file's or default value).
+
+    Returns
+    -------
+    visland.render.SceneParams
+        Validated; a bad value raises ``ValueError`` naming the option.
+    """
     from visland.render.params import SceneParams
     base = SceneParams.load(args.scene).to_dict() if args.scene else SceneParams().to_dict()
     if args.flat:
@@ -95,7 +114,20 @@ def scene_from_args(args):
 
 
 def runway_size_from_args(args, runway):
-    """Runway length and width: ``--runway-length/--runway-width``, else the ``--variety`` draw, else ``runway``'s."""
+    """Runway length and width: ``--runway-length/--runway-width``, else the ``--variety`` draw, else ``runway``'s.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``visland generate`` arguments.
+    runway : visland.runway.Runway
+        The scenario's runway (the fallback).
+
+    Returns
+    -------
+    length_m, width_m : float
+        Runway length and width in metres.
+    """
     length, width = runway.length_m, runway.width_m
     if getattr(args, "variety", None) is not None:
         from visland.render.variety import draw_variety
@@ -109,6 +141,18 @@ def runway_size_from_args(args, runway):
 
 
 def cmd_generate(args) -> int:
+    """Run ``visland generate``: simulate the scenario, render every frame, write the dataset folder.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed ``visland generate`` arguments (see ``visland generate --help``).
+
+    Returns
+    -------
+    int
+        Exit status, 0 on success (bad input raises ``ValueError``: one line, status 2).
+    """
     from visland.camera import CameraModel
     from visland.cli import scenario_from_args, simulation_options_from_args
     from visland.runway import Runway

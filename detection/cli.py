@@ -58,7 +58,14 @@ def _cmd_bench(args) -> int:
 
 
 def register(subparsers):
-    """Add this stage's commands to the visland parser."""
+    """Add this stage's commands to the visland parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
+        command added sets ``func``, called with the parsed arguments, returning the exit status.
+    """
     p = subparsers.add_parser(
         "detect", help="detect the runway in a frame folder; write measurements.csv",
         description="Detect the runway (edges, centre line, threshold and far corners, d_F and the heading "
@@ -82,7 +89,13 @@ def register(subparsers):
 
 
 def register_bench(bench_subparsers):
-    """Add ``visland bench detect``."""
+    """Add ``visland bench detect``.
+
+    Parameters
+    ----------
+    bench_subparsers : argparse._SubParsersAction
+        The targets of ``visland bench`` (:func:`visland.cli.build_parser`).
+    """
     p = bench_subparsers.add_parser(
         "detect", help="detection speed: whole-frame acquisition and region-of-interest tracking",
         description="Time the detector on full-size frames: acquisition (no previous detection) on every "

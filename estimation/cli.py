@@ -64,7 +64,14 @@ def _cmd_bench_estimate(args) -> int:
 
 
 def register(subparsers):
-    """Add this stage's commands to the visland parser."""
+    """Add this stage's commands to the visland parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
+        command added sets ``func``, called with the parsed arguments, returning the exit status.
+    """
     p = subparsers.add_parser(
         "estimate", help="run observers on a folder's measurements and telemetry; write estimates.csv",
         description="Estimate the aircraft's position relative to the runway from image measurements and "
@@ -108,7 +115,13 @@ def register(subparsers):
 
 
 def register_bench(bench_subparsers):
-    """Add ``visland bench estimate``."""
+    """Add ``visland bench estimate``.
+
+    Parameters
+    ----------
+    bench_subparsers : argparse._SubParsersAction
+        The targets of ``visland bench`` (:func:`visland.cli.build_parser`).
+    """
     p = bench_subparsers.add_parser("estimate", help="time every observer on a 100 s, 50 Hz approach",
                                     description="Time each observer's steps over a 100 s, 50 Hz approach (target "
                                                 "0.5 s); ends with one JSON line of per-observer timings.")

@@ -6,11 +6,24 @@ made by ``visland generate`` (:mod:`visland.datasets.generate_cli`).
 
 
 def register(subparsers):
-    """The render stage adds no top-level command (``generate`` lives in visland.datasets)."""
+    """The render stage adds no top-level command (``generate`` lives in visland.datasets).
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
+        command added sets ``func``, called with the parsed arguments, returning the exit status.
+    """
 
 
 def register_bench(bench_subparsers):
-    """Add ``visland bench render``."""
+    """Add ``visland bench render``.
+
+    Parameters
+    ----------
+    bench_subparsers : argparse._SubParsersAction
+        The targets of ``visland bench`` (:func:`visland.cli.build_parser`).
+    """
     p = bench_subparsers.add_parser(
         "render", help="time the renderer: seconds per frame with readback, with PNG writing, per quality option")
     p.add_argument("--size", type=int, default=2048, help="square image size in pixels (default 2048)")

@@ -10,7 +10,14 @@ import argparse
 
 
 def register(subparsers):
-    """Add this stage's commands to the visland parser."""
+    """Add this stage's commands to the visland parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
+        command added sets ``func``, called with the parsed arguments, returning the exit status.
+    """
     p = subparsers.add_parser(
         "track", help="track designated points (runway corners) through a frame folder into measurements.csv",
         description="Template tracking of designated points (thesis 5.3.2.1) through the frames of DIR "
@@ -49,7 +56,13 @@ def register(subparsers):
 
 
 def register_bench(bench_subparsers):
-    """Add ``visland bench track``."""
+    """Add ``visland bench track``.
+
+    Parameters
+    ----------
+    bench_subparsers : argparse._SubParsersAction
+        The targets of ``visland bench`` (:func:`visland.cli.build_parser`).
+    """
     p = bench_subparsers.add_parser(
         "track", help="tracker speed: frames per second for N points (ends with a JSON line)",
         description="Times PointTracker.step on frames held in memory (synthetic planar scene along the "
@@ -102,7 +115,20 @@ def _cmd_track(args) -> int:
 
 
 def summary_lines(run, labels=None) -> list:
-    """Per point: frames measured, losses, anchoring; pixel error against labels when present."""
+    """Per point: frames measured, losses, anchoring; pixel error against labels when present.
+
+    Parameters
+    ----------
+    run : visland.tracking.TrackRun
+        The outcome of :func:`visland.tracking.track_source`.
+    labels : visland.contracts.Table, optional
+        The folder's ``labels.csv`` (exact corners, pixels), for the error columns.
+
+    Returns
+    -------
+    list of str
+        The lines to print, one per tracked point.
+    """
     import numpy as np
 
     from visland.tracking.run import error_against_labels

@@ -31,7 +31,20 @@ __all__ = ["Attitude", "R_camera_from_level", "rotation_homography", "virtual_to
 
 @dataclass(frozen=True)
 class Attitude:
-    """Inertial attitude of the body at one frame (ZYX Euler angles from NED, radians)."""
+    """Inertial attitude of the body at one frame (ZYX Euler angles from NED, radians).
+
+    Attributes
+    ----------
+    roll_rad, pitch_rad : float
+        Roll and pitch of the body frame relative to NED, radians.
+    heading_rad : float
+        True heading, radians (from north, clockwise seen from above).
+
+    Raises
+    ------
+    ValueError
+        When an angle is not a finite number.
+    """
 
     roll_rad: float
     pitch_rad: float

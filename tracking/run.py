@@ -35,10 +35,26 @@ ANCHOR_SOURCES = ("detector", "labels")
 class TrackRun:
     """The outcome of :func:`track_source`.
 
-    ``steps`` has one entry per frame of the source (None before the start frame);
-    ``columns`` the ``measurements.csv`` columns and ``column_order`` their order;
-    ``flagged`` the ``(frame, reason)`` of frames that could not be used; ``analysis_s`` the
-    time spent in the tracker and the anchor provider (not in decoding images).
+    Attributes
+    ----------
+    steps : list of TrackStep or None
+        One entry per frame of the source (None before the start frame).
+    point_names : tuple of str
+        The tracked points, in column order.
+    columns : dict of str to ndarray
+        The ``measurements.csv`` columns (SPEC units: pixels, radians, degrees).
+    column_order : list of str
+        The order of ``columns`` in the file.
+    start_frame : int
+        Index of the designation frame.
+    params : TrackerParams
+        The parameters the tracker ran with.
+    anchor : str or None
+        The anchor provider (``"detector"``, ``"labels"``) or None.
+    flagged : list of (int, str)
+        ``(frame, reason)`` of the frames that could not be used.
+    analysis_s : float
+        Seconds spent in the tracker and the anchor provider (not in decoding images).
     """
 
     steps: list
@@ -178,9 +194,20 @@ def track_source(source, init: str | None = "labels", params: TrackerParams | No
 
 
 def error_against_labels(run: TrackRun, labels) -> dict:
-    """Pixel distance between each measured corner and its label: ``{corner: (n_frames,) array}``.
+    """Pixel distance between each measured corner and its label.
 
-    NaN where the corner was not measured or not labelled visible.
+    Parameters
+    ----------
+    run : TrackRun
+        The outcome of :func:`track_source`.
+    labels : visland.contracts.Table
+        The folder's ``labels.csv`` (exact corners, pixels, one row per frame).
+
+    Returns
+    -------
+    dict of str to ndarray, shape (n_frames,)
+        ``{corner: distance in pixels}`` for the tracked corners; NaN where the corner was not
+        measured or not labelled visible.
     """
     out = {}
     for name in run.point_names:

@@ -64,10 +64,21 @@ MEASURED_STATUSES = frozenset({"designated", "tracked", "anchored", "reprojected
 class PointReport:
     """One point in one frame.
 
-    ``uv`` (2,) is the measured pixel position (NaN unless ``measured``); ``score`` the
-    correlation of the accepted or refused match (NaN if none); ``residual_px`` the distance
-    to the rigid ground-plane motion of the points (NaN if not checked); ``reason`` says what
-    was unusual (empty when tracked normally).
+    Attributes
+    ----------
+    name : str
+        The point's name (a corner of :data:`visland.runway.CORNER_NAMES`, or an edge point).
+    status : str
+        One of :data:`POINT_STATUSES`; those of :data:`MEASURED_STATUSES` carry a position.
+    uv : ndarray, shape (2,)
+        Measured pixel position ``(u, v)`` (SPEC convention: (0, 0) at the centre of the
+        top-left pixel, u right, v down); NaN unless ``measured``.
+    score : float
+        Normalised cross-correlation of the accepted or refused match, NaN if none.
+    residual_px : float
+        Distance in pixels to the rigid ground-plane motion of the points, NaN if not checked.
+    reason : str
+        What was unusual (empty when tracked normally).
     """
 
     name: str
@@ -84,7 +95,24 @@ class PointReport:
 
 @dataclass(frozen=True)
 class TrackStep:
-    """Everything the tracker says about one frame."""
+    """Everything the tracker says about one frame.
+
+    Attributes
+    ----------
+    frame_index : int
+        0-based index of the frame in the sequence given to the tracker.
+    points : tuple of PointReport
+        One report per tracked point, in the tracker's point order.
+    motion : visland.tracking.rigid.PlaneMotion or None
+        The ground-plane motion fitted to the points since the designation (None when it
+        could not be fitted).
+    consistency_checked : bool
+        Whether the points were checked against one rigid runway motion this frame.
+    anchor : AnchorObservation or None
+        The anchor provider's observation used this frame (None when not anchored).
+    note : str
+        What happened to the frame as a whole (a skipped frame's reason), empty otherwise.
+    """
 
     frame_index: int
     points: tuple

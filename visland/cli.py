@@ -52,7 +52,15 @@ def _angles(text: str):
 
 
 def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
-    """Arguments shared by ``simulate`` and the commands that simulate before rendering."""
+    """Arguments shared by ``simulate`` and the commands that simulate before rendering.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The subcommand's parser: gains ``--scenario``, ``--out``, ``--fps``, ``--seed``,
+        ``--calibration-error``, ``--slope``, ``--velocity-bias``, ``--imu-noise``,
+        ``--airspeed-noise``, ``--no-airspeed`` and ``--force``.
+    """
     parser.add_argument("--scenario", required=True, metavar="NAME|FILE",
                         help="built-in scenario name (see 'visland scenarios') or a TOML scenario file")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder (must not exist unless --force)")
@@ -76,7 +84,22 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def scenario_from_args(args):
-    """The scenario of ``--scenario`` with the runway options (``--slope``) applied."""
+    """The scenario of ``--scenario`` with the runway options (``--slope``) applied.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments of a command with :func:`add_simulation_arguments`.
+
+    Returns
+    -------
+    visland.scenarios.Scenario
+
+    Raises
+    ------
+    ValueError
+        An unknown scenario or a slope outside +-2 % (naming ``--slope``).
+    """
     from dataclasses import replace
     from visland.scenarios import resolve_scenario, with_runway
     scenario = resolve_scenario(args.scenario)
@@ -90,7 +113,25 @@ def scenario_from_args(args):
 
 
 def simulation_options_from_args(args, camera=None):
-    """Build :class:`visland.simulate.SimulationOptions` from parsed arguments."""
+    """Build :class:`visland.simulate.SimulationOptions` from parsed arguments.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments of a command with :func:`add_simulation_arguments` (``--pixel-noise``
+        too when the command has it).
+    camera : visland.camera.CameraModel, optional
+        The camera to simulate (default: :meth:`CameraModel.default`, the SPEC 2048 px camera).
+
+    Returns
+    -------
+    visland.simulate.SimulationOptions
+
+    Raises
+    ------
+    ValueError
+        A negative ``--imu-noise``, or an IMU parameter out of range (naming it).
+    """
     from visland.camera import CameraModel
     from visland.sensors import ImuParams
     from visland.simulate import SimulationOptions
@@ -129,6 +170,14 @@ def _cmd_simulate(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``visland`` parser: the core commands, then each stage's (:data:`STAGE_CLI_MODULES`).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Every subcommand sets ``func(args) -> int``. Building it imports only the light stage
+        ``cli`` modules (no NumPy, OpenCV or OpenGL: ``tests/core/test_exports.py``).
+    """
     parser = argparse.ArgumentParser(
         prog="visland",
         description="Vision-based landing on unknown runways: simulate, render, detect, track, estimate.")
@@ -168,6 +217,19 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """Run the ``visland`` command (the console script).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program name (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: the command's (0 on success), 2 for a ``ValueError`` (printed as one line
+        on stderr naming the command), 130 when interrupted.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

@@ -69,6 +69,16 @@ def list_frame_files(frames_dir: Path) -> list[Path]:
     An entry named as an image that is not one (a folder, a dangling link, a link loop) stays
     in the list: it is a frame that cannot be used, flagged by :meth:`FrameFolder.read_frame`,
     and every later frame keeps its index and time.
+
+    Parameters
+    ----------
+    frames_dir : Path
+        The ``frames/`` folder.
+
+    Returns
+    -------
+    list of Path
+        Sorted by name; never empty (no image raises ``ValueError``).
     """
     if not frames_dir.is_dir():
         raise ValueError(f"{frames_dir}: frames folder not found")
@@ -115,14 +125,38 @@ class FrameFolder:
 
     Parameters
     ----------
-    root : the folder.
-    camera : override of ``root/camera.json``.
-    telemetry : path overriding ``root/telemetry.csv``.
-    frames_csv : path overriding ``root/frames.csv``.
-    fps : frame rate used when there is no frames.csv (default 25 Hz).
-    time_offset_s : seconds added to the telemetry's times (its clock against the frames', :mod:`visland.clocks`).
-    require_telemetry : raise if no telemetry (detection can run without it only with a guess
-        of the horizon, so by default it is required).
+    root : str or Path
+        The folder (SPEC layout, see the module docstring).
+    camera : CameraModel or str or Path, optional
+        The camera, or a path overriding ``root/camera.json``.
+    telemetry : str or Path, optional
+        Path overriding ``root/telemetry.csv``.
+    frames_csv : str or Path, optional
+        Path overriding ``root/frames.csv``.
+    fps : float, optional
+        Frame rate in Hz used when there is no frames.csv (default 25 Hz).
+    require_telemetry : bool, default True
+        Raise if there is no telemetry (without it detection reads the horizon off each frame;
+        estimation needs it).
+    time_offset_s : float, default 0
+        Seconds added to the telemetry's times (its clock against the frames',
+        :mod:`visland.clocks`).
+
+    Attributes
+    ----------
+    frame_files : list of Path
+        The frames, in frame order.
+    times_s : ndarray, shape (n,)
+        Frame times in seconds.
+    inertial : visland.sensors.InertialSeries or None
+        The telemetry interpolated at ``times_s`` (None without telemetry).
+    telemetry, truth, labels : visland.contracts.Table or None
+        The files as read (None when absent).
+
+    Raises
+    ------
+    ValueError
+        One sentence naming the file, line or frame that is wrong.
     """
 
     def __init__(self, root, camera: CameraModel | str | Path | None = None, telemetry=None, frames_csv=None,
@@ -215,8 +249,18 @@ def _not_a_file(path: Path) -> str:
 
 
 def as_grey(image):
-    """``image`` as grey levels: unchanged when it is (H, W), converted from RGB when (H, W, 3);
-    None stays None."""
+    """``image`` as grey levels: unchanged when it is (H, W), converted from RGB when (H, W, 3).
+
+    Parameters
+    ----------
+    image : ndarray, shape (H, W) or (H, W, 3), uint8, or None
+        A frame (RGB channel order when in colour).
+
+    Returns
+    -------
+    ndarray, shape (H, W), uint8, or None
+        None stays None.
+    """
     if image is None or image.ndim == 2:
         return image
     import cv2  # heavy import kept local: the core must start fast
@@ -234,10 +278,19 @@ def pinhole_frame(image, camera: CameraModel):
     """The frame as the pinhole camera of the same intrinsics would see it (SPEC: features are
     always in the undistorted image).
 
-    ``image`` is a frame as ``camera`` took it, (H, W) or (H, W, 3) uint8; returned unchanged
-    when the camera has no lens distortion, else resampled through
-    :meth:`CameraModel.undistortion_maps` (bilinear; pixels whose lens position falls outside
-    the frame come back 0). The maps are computed once per camera.
+    Parameters
+    ----------
+    image : ndarray, shape (H, W) or (H, W, 3), uint8, or None
+        A frame as ``camera`` took it (None stays None).
+    camera : visland.camera.CameraModel
+        Its intrinsics and lens distortion.
+
+    Returns
+    -------
+    ndarray, same shape and dtype as ``image``
+        Unchanged when the camera has no lens distortion, else resampled through
+        :meth:`CameraModel.undistortion_maps` (bilinear; pixels whose lens position falls
+        outside the frame come back 0). The maps are computed once per camera.
     """
     if image is None or not camera.has_distortion:
         return image
@@ -255,9 +308,18 @@ MASK_GROWTH_PX = 3
 def ignored_pixels(camera: CameraModel) -> np.ndarray | None:
     """Pixels of the pinhole image that show no scene, as a read-only boolean image, or None.
 
-    The aircraft's structure (:meth:`CameraModel.structure_mask`, carried through the lens like
-    the frame) grown by :data:`MASK_GROWTH_PX`, and with a distorting lens the pinhole pixels
-    whose lens position falls outside the frame. None when every pixel shows the scene.
+    Parameters
+    ----------
+    camera : visland.camera.CameraModel
+        Its structure mask and lens.
+
+    Returns
+    -------
+    ndarray of bool, shape (height, width), or None
+        The aircraft's structure (:meth:`CameraModel.structure_mask`, carried through the lens
+        like the frame) grown by :data:`MASK_GROWTH_PX`, and with a distorting lens the pinhole
+        pixels whose lens position falls outside the frame. None when every pixel shows the
+        scene.
     """
     import cv2  # heavy import kept local: the core must start fast
     ignored = np.zeros((camera.height, camera.width), bool)
@@ -284,6 +346,18 @@ def scene_frame(image, camera: CameraModel):
     The fill is a normalised convolution (the blurred scene divided by the blurred weight of
     the scene pixels) on a coarse image, widened until every hole is reached: it continues the
     surrounding grey levels without a step at the mask's outline, and carries no structure.
+
+    Parameters
+    ----------
+    image : ndarray, shape (H, W) or (H, W, 3), uint8, or None
+        A frame as ``camera`` took it (None stays None).
+    camera : visland.camera.CameraModel
+        Its intrinsics, lens and structure mask.
+
+    Returns
+    -------
+    ndarray, same shape and dtype as ``image``
+        The pinhole frame with the ignored pixels filled.
     """
     image = pinhole_frame(image, camera)
     ignored = ignored_pixels(camera) if image is not None else None

@@ -197,7 +197,14 @@ def _cmd_mask(args) -> int:
 
 
 def register(subparsers):
-    """Add the footage helpers' commands to the visland parser."""
+    """Add the footage helpers' commands (``calibrate``, ``mask``) to the visland parser.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
+        command added sets ``func``, called with the parsed arguments, returning the exit status.
+    """
     p = subparsers.add_parser(
         "calibrate", help="camera.json with lens distortion from chessboard footage (or from a field of view)",
         description="OpenCV's ordinary chessboard calibration: frames sampled evenly over a video or a folder of "

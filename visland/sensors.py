@@ -42,7 +42,31 @@ TIME_MATCH_S = 1e-6
 
 @dataclass(frozen=True)
 class ImuParams:
-    """Inertial unit imperfections (defaults: a perfect unit, as thesis hypothesis 2 assumes)."""
+    """Inertial unit imperfections (defaults: a perfect unit, as thesis hypothesis 2 assumes).
+
+    Attributes
+    ----------
+    velocity_bias_fraction : float
+        Constant relative velocity bias ``b``: ``v_meas = (1 + b) v_true`` on every NED
+        component (thesis 5.2.2.3: 0.01, 0.05), within [-0.5, 0.5].
+    velocity_noise_mps : float
+        Standard deviation of the white noise on each NED velocity component, m/s.
+    attitude_noise_deg : float
+        Standard deviation of the white noise on roll, pitch and heading, degrees.
+    rate_noise_dps : float
+        Standard deviation of the white noise on the body rates (p, q, r), deg/s.
+    seed : int
+        Seed of the noise generator (non-negative).
+    airspeed : bool
+        Whether the unit reports the true airspeed (telemetry column ``tas_mps``).
+    airspeed_noise_mps : float
+        Standard deviation of the white noise on the true airspeed, m/s (0.5: about 1 kt).
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, naming the field.
+    """
 
     velocity_bias_fraction: float = 0.0
     velocity_noise_mps: float = 0.0
@@ -214,7 +238,23 @@ class InertialSeries:
 
 
 def measure_imu(trajectory: Trajectory, params: ImuParams | None = None) -> InertialSeries:
-    """What the inertial unit reports along ``trajectory`` (see module docstring)."""
+    """What the inertial unit reports along ``trajectory`` (see module docstring).
+
+    Parameters
+    ----------
+    trajectory : visland.flight.Trajectory
+        The true flight, sampled at the simulation rate.
+    params : ImuParams, optional
+        The unit's imperfections (default: a perfect unit).
+
+    Returns
+    -------
+    InertialSeries
+        At the trajectory's times: attitude (rad) and body rates (rad/s) relative to NED,
+        ground velocity in NED (m/s), true airspeed ``|v_ned - wind_ned|`` (m/s) when
+        ``params.airspeed``. Every noise stream is drawn even when its sigma is zero, so that
+        switching one on leaves the others' realisations unchanged.
+    """
     params = params or ImuParams()
     rng = np.random.default_rng(params.seed)
     n = len(trajectory.t_s)
@@ -241,9 +281,25 @@ def measure_imu(trajectory: Trajectory, params: ImuParams | None = None) -> Iner
 
 
 def camera_with_calibration_error(camera: CameraModel, error_deg) -> CameraModel:
-    """The camera as actually mounted: nominal mounting plus ``error_deg``.
+    """The camera as actually mounted: nominal mounting plus ``error_deg`` (thesis 5.2.2.2).
 
-    ``error_deg`` is one number (added to roll, pitch and yaw) or three ``(roll, pitch, yaw)``.
+    Parameters
+    ----------
+    camera : visland.camera.CameraModel
+        The nominal camera (what ``camera.json`` says).
+    error_deg : float or sequence of 3 floats
+        Mounting error in degrees: one number added to roll, pitch and yaw of the mounting
+        (body to camera), or three ``(roll, pitch, yaw)``; each within 10 deg.
+
+    Returns
+    -------
+    visland.camera.CameraModel
+        The same intrinsics, mounting ``mount_rpy_rad + radians(error_deg)``.
+
+    Raises
+    ------
+    ValueError
+        A non-finite error or one over 10 deg.
     """
     errors = np.broadcast_to(np.asarray(error_deg, dtype=float), (3,))
     if not np.all(np.isfinite(errors)) or np.any(np.abs(errors) > 10.0):
