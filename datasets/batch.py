@@ -6,8 +6,11 @@ line of the index with its reason and does not stop the others. At the end ``DIR
 links every run's report with one line of figures, ``DIR/index.json`` holds the same, and the
 ``compare`` tables across the runs that have truth go to ``DIR/compare``.
 
-Inputs run one after the other in this process (each already decodes ahead in a thread and the
-detector uses both cores through OpenCV); parallel runs over processes or Dask are not done.
+By default the inputs run one after the other in this process (each decodes ahead in a thread
+and the detector uses every core through OpenCV). ``workers > 1`` runs that many inputs at once
+in worker processes (spawned: each has its own OpenCV state, limited to its share of the cores),
+``scheduler`` ships each input to a Dask cluster as one task; either way each run's log is
+printed when it ends, and the index and comparison are the same as one after the other.
 """
 from __future__ import annotations
 
@@ -35,31 +38,54 @@ def _run_names(inputs) -> list[str]:
     return names
 
 
-def process_batch(inputs, out_dir, options, force: bool = False, echo=print) -> dict:
+def process_one(path: str, run_dir: str, options, force: bool, echo=None, cv_threads: int = 0) -> dict:
+    """One input of a batch: its index row, and its log when ``echo`` is None (module level, so
+    that a process pool or Dask can ship it). A ``ValueError`` is the row's reason, not raised."""
+    from visland.datasets.process import process_input
+    if cv_threads:
+        import cv2
+        cv2.setNumThreads(cv_threads)
+    lines: list[str] = []
+    tic = time.perf_counter()
+    row = {"input": str(path), "name": Path(run_dir).name}
+    try:
+        run = process_input(path, run_dir, options, force=force, echo=echo or lines.append)
+    except ValueError as error:
+        (echo or lines.append)(f"{path}: failed: {error}")
+        row.update(status="failed", reason=str(error), wall_s=time.perf_counter() - tic)
+    else:
+        row.update(status="done", wall_s=time.perf_counter() - tic, report=(Path(run_dir) / "report.html").exists(),
+                   **_figures(Path(run_dir), run))
+    if echo is None:
+        row["log"] = lines
+    return row
+
+
+def process_batch(inputs, out_dir, options, force: bool = False, echo=print, workers: int = 1,
+                  scheduler: str | None = None) -> dict:
     """Process every input into ``out_dir/<name>``; write the index and the comparison.
 
-    Returns the index: ``{"runs": [{"input", "name", "status", "reason" or figures...}], ...}``.
+    ``workers``: inputs processed at once in worker processes (1: one after the other, here);
+    ``scheduler``: a Dask scheduler address, each input one task on the cluster. Returns the
+    index: ``{"runs": [{"input", "name", "status", "reason" or figures...}], ...}``.
     """
-    from visland.datasets.process import process_input
-
+    from dataclasses import replace
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= 64:
+        raise ValueError(f"--workers must be a whole number from 1 to 64, got {workers!r}")
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise ValueError(f"--out {out_dir}: is a file; a batch writes a folder of runs")
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    rows = []
-    for path, name in zip(inputs, _run_names(inputs)):
-        echo(f"== {path} -> {out_dir / name}")
-        tic = time.perf_counter()
-        try:
-            run = process_input(path, out_dir / name, options, force=force, echo=echo)
-        except ValueError as error:
-            echo(f"{path}: failed: {error}")
-            rows.append({"input": str(path), "name": name, "status": "failed", "reason": str(error),
-                         "wall_s": time.perf_counter() - tic})
-            continue
-        rows.append({"input": str(path), "name": name, "status": "done", "wall_s": time.perf_counter() - tic,
-                     "report": (out_dir / name / "report.html").exists(), **_figures(out_dir / name, run)})
+    jobs = [(str(path), str(out_dir / name)) for path, name in zip(inputs, _run_names(inputs))]
+    if scheduler is None and workers == 1:
+        rows = []
+        for path, run_dir in jobs:
+            echo(f"== {path} -> {run_dir}")
+            rows.append(process_one(path, run_dir, options, force, echo=echo))
+    else:
+        quiet = replace(options, quiet=True)              # no progress bars from several runs at once
+        rows = _run_parallel(jobs, quiet, force, echo, workers, scheduler)
     done = [out_dir / r["name"] for r in rows if r["status"] == "done"]
     comparison = None
     with_truth = [d for d in done if (d / "metrics.json").exists()]
@@ -74,6 +100,44 @@ def process_batch(inputs, out_dir, options, force: bool = False, echo=print) -> 
     echo(f"batch: {len(done)} of {len(rows)} inputs processed in {index['wall_s']:.0f} s; "
          f"index {out_dir / 'index.html'}" + (f", comparison {out_dir / 'compare'}" if comparison else ""))
     return index
+
+
+def _run_parallel(jobs, options, force: bool, echo, workers: int, scheduler: str | None) -> list:
+    """The batch's inputs at once: ``workers`` spawned processes, or tasks on the Dask cluster at
+    ``scheduler``; each run's log printed as it ends, the rows in the inputs' order."""
+    import concurrent.futures
+    import multiprocessing
+    import os
+    rows: list = [None] * len(jobs)
+
+    def finished(k, row):
+        echo(f"== {jobs[k][0]} -> {jobs[k][1]} ({row['status']}, {row['wall_s']:.0f} s)")
+        for line in row.pop("log", []):
+            echo(line)
+        rows[k] = row
+
+    if scheduler is not None:
+        from dask.distributed import Client, as_completed
+        try:
+            client = Client(scheduler, timeout=10, set_as_default=False)
+        except (OSError, TimeoutError) as error:
+            raise ValueError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({error})") from None
+        with client:
+            echo(f"batch: {len(jobs)} inputs on the Dask cluster at {scheduler}")
+            futures = {client.submit(process_one, path, run_dir, options, force, pure=False): k
+                       for k, (path, run_dir) in enumerate(jobs)}
+            for future in as_completed(list(futures), loop=client.loop):
+                finished(futures[future], future.result())
+        return rows
+    cv_threads = max(1, (os.cpu_count() or 1) // workers)
+    echo(f"batch: {len(jobs)} inputs, {workers} at a time in worker processes")
+    with concurrent.futures.ProcessPoolExecutor(max_workers=workers,
+                                                mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = {pool.submit(process_one, path, run_dir, options, force, None, cv_threads): k
+                   for k, (path, run_dir) in enumerate(jobs)}
+        for future in concurrent.futures.as_completed(futures):
+            finished(futures[future], future.result())
+    return rows
 
 
 def _figures(run_dir: Path, run: dict) -> dict:

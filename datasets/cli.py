@@ -24,10 +24,13 @@ def _cmd_process(args) -> int:
             if value:
                 raise ValueError(f"{flag} names one file, but a batch of {len(args.input)} inputs takes each input's own")
     if len(args.input) == 1:
+        if args.workers != 1 or args.scheduler:
+            raise ValueError("--workers and --scheduler spread a batch of several inputs; one input runs here")
         process_input(args.input[0], args.out, options, force=args.force)
         return 0
     from visland.datasets.batch import process_batch
-    index = process_batch(args.input, args.out, options, force=args.force)
+    index = process_batch(args.input, args.out, options, force=args.force, workers=args.workers,
+                          scheduler=args.scheduler)
     return 0 if index["done"] else 2
 
 
@@ -182,6 +185,10 @@ def register(subparsers):
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")
+    p.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="a batch: inputs processed at once in worker processes (default 1: one after the other)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="a batch: run each input as a task on this Dask scheduler, e.g. tcp://127.0.0.1:8786")
     p.set_defaults(func=_cmd_process)
 
     p = subparsers.add_parser(

@@ -157,6 +157,8 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
                                        initial_error=options.initial_error, params_file=options.params_file)
     echo(f"{source.name}: {len(source)} frames of {source.camera.width}x{source.camera.height}, "
          f"{source.times_s[-1] - source.times_s[0]:.1f} s; measuring with {', '.join(out_dirs)}")
+    if getattr(source, "timing", "").startswith("variable"):
+        echo(f"{source.name}: {source.timing}")
     measured = measure_many(source, list(out_dirs), init=options.init, quiet=options.quiet)
     runs = {}
     for kind, out_dir in out_dirs.items():
@@ -241,6 +243,8 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
             "scenario": _scenario_of(source),
             "observers": list(options.observers),
             "n_frames": n,
+            # how the frame times were obtained (frames.csv, --fps, the video's constant or variable rate)
+            "frame_timing": getattr(source, "timing", None),
             "n_found": measurements.n_found,
             "n_flagged": len(measurements.flagged),
             "flagged": [{"frame": int(i), "reason": r} for i, r in measurements.flagged],

@@ -92,7 +92,9 @@ class VideoSource(FrameSource):
     """A video file; telemetry, camera and optional truth/frames.csv sit beside it or are given.
 
     Frame times come from ``frames_csv`` (``frame,t_s``) if given or present beside the video,
-    else from ``fps`` if given, else from the video's own frame rate.
+    else from ``fps`` if given, else from the container's timestamps: a video of constant frame
+    rate gives ``k / fps`` exactly, one of variable frame rate (a recorder that drops or delays
+    frames) each frame's own presentation time. ``timing`` says which, in one sentence.
     """
 
     def __init__(self, path, camera=None, telemetry=None, frames_csv=None, fps=None, time_offset_s=0.0):
@@ -103,7 +105,7 @@ class VideoSource(FrameSource):
         capture = cv2.VideoCapture(str(self.path))
         if not capture.isOpened():
             raise ValueError(f"{self.path}: the video cannot be opened (unknown format or damaged file)")
-        self._count = _count_frames(capture)
+        self._count, stamps_s = _scan_frames(capture)
         video_fps = capture.get(cv2.CAP_PROP_FPS)
         capture.release()
         if self._count == 0:
@@ -114,11 +116,12 @@ class VideoSource(FrameSource):
             if table.n_rows != self._count:
                 raise ValueError(f"{frames_csv}: lists {table.n_rows} frames but {self.path} holds {self._count}")
             self.times_s = table["t_s"]
+            self.timing = f"frame times from {frames_csv}"
+        elif fps is not None:
+            self.times_s = np.arange(self._count) / float(fps)
+            self.timing = f"frame times from --fps {fps:g}"
         else:
-            rate = fps if fps is not None else video_fps
-            if not rate or not math.isfinite(rate) or rate <= 0:
-                raise ValueError(f"{self.path}: the video gives no frame rate; pass --fps or --frames-csv")
-            self.times_s = np.arange(self._count) / float(rate)
+            self.times_s, self.timing = _container_times(stamps_s, video_fps, self.path)
         camera_path = Path(camera) if isinstance(camera, (str, Path)) else here / "camera.json"
         if isinstance(camera, CameraModel):
             self.camera = camera
@@ -197,12 +200,38 @@ class LabelsSource(FrameSource):
         raise ValueError(f"{self.name}: no frames/ folder; only --source ideal can process a simulated folder")
 
 
-def _count_frames(capture) -> int:
-    """Frames a video really holds (the container's count is often wrong): grab them all."""
-    count = 0
+def _scan_frames(capture) -> tuple[int, np.ndarray]:
+    """Frames a video really holds (the container's count is often wrong: grab them all) and
+    each one's presentation time from the container (s; NaN where the container gives none)."""
+    import cv2
+    stamps = []
     while capture.grab():
-        count += 1
-    return count
+        stamps.append(capture.get(cv2.CAP_PROP_POS_MSEC) / 1000.0)
+    return len(stamps), np.asarray(stamps, dtype=float)
+
+
+#: Container timestamps within this of ``k / fps`` (s) are a constant frame rate: ``k / fps`` is
+#: used (the container rounds its times to its time base, often 1 ms).
+CONSTANT_RATE_TOLERANCE_S = 1.5e-3
+
+
+def _container_times(stamps_s: np.ndarray, video_fps: float, path: Path) -> tuple[np.ndarray, str]:
+    """Frame times of a video without frames.csv or --fps: ``k / fps`` for a constant frame rate,
+    else the container's presentation times (variable frame rate), with one sentence saying which."""
+    n = len(stamps_s)
+    rate_ok = bool(video_fps) and math.isfinite(video_fps) and video_fps > 0
+    stamps_ok = n >= 2 and np.isfinite(stamps_s).all() and (np.diff(stamps_s) > 0).all()
+    if rate_ok:
+        uniform = np.arange(n) / float(video_fps)
+        if not stamps_ok or np.max(np.abs(stamps_s - stamps_s[0] - uniform)) <= CONSTANT_RATE_TOLERANCE_S:
+            return uniform, f"frame times from the video's constant frame rate ({video_fps:g} frames/s)"
+    if not stamps_ok:
+        raise ValueError(f"{path}: the video gives no frame rate and no increasing frame timestamps; pass --fps or "
+                         "--frames-csv")
+    times = stamps_s - stamps_s[0]
+    steps = np.diff(times)
+    return times, (f"variable frame rate: frame times from the container's timestamps (intervals "
+                   f"{steps.min():.3f} to {steps.max():.3f} s, median {np.median(steps):.3f} s)")
 
 
 def open_source(path, camera=None, telemetry=None, frames_csv=None, fps=None, time_offset_s=0.0) -> FrameSource:

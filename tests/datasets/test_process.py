@@ -296,3 +296,37 @@ def test_a_batch_of_recordings_with_one_bad_input(simulated, tmp_path):
     assert "approach-a" in page and "failed:" in page
     assert index["comparison"] == "compare" and any((tmp_path / "batch" / "compare").iterdir())
     assert json.loads((tmp_path / "batch" / "index.json").read_text())["done"] == 2
+
+
+@pytest.mark.slow
+def test_a_batch_in_worker_processes_and_on_dask_matches_one_after_the_other(simulated, tmp_path):
+    """The same three inputs (one broken) on 2 worker processes and on a local Dask cluster: the same
+    rows, in the inputs' order, and the same estimates as one after the other."""
+    import shutil
+
+    from distributed import LocalCluster
+
+    from visland.datasets.batch import process_batch
+    inputs = []
+    for name in ("approach-a", "broken", "approach-b"):
+        shutil.copytree(simulated, tmp_path / "in" / name)
+        inputs.append(tmp_path / "in" / name)
+    (tmp_path / "in" / "broken" / "telemetry.csv").unlink()
+    options = _quiet(source="ideal", report=False)
+    serial = process_batch(inputs, tmp_path / "serial", options, echo=lambda s: None)
+    lines: list = []
+    pooled = process_batch(inputs, tmp_path / "pooled", options, echo=lines.append, workers=2)
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        dask = process_batch(inputs, tmp_path / "dask", options, echo=lambda s: None,
+                             scheduler=cluster.scheduler_address)
+    for index in (pooled, dask):
+        assert [(r["name"], r["status"]) for r in index["runs"]] == [(r["name"], r["status"]) for r in serial["runs"]]
+        assert [r.get("dh_err_100ft_m") for r in index["runs"]] == [r.get("dh_err_100ft_m") for r in serial["runs"]]
+    assert "batch: 3 inputs, 2 at a time in worker processes" in lines
+    assert any(line.startswith("== ") and "(failed, " in line for line in lines)
+    for name in ("approach-a", "approach-b"):
+        assert (tmp_path / "pooled" / name / "estimates.csv").read_bytes() == \
+            (tmp_path / "serial" / name / "estimates.csv").read_bytes()
+    with pytest.raises(ValueError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+        process_batch(inputs, tmp_path / "nowhere", options, echo=lambda s: None, scheduler="tcp://127.0.0.1:9")

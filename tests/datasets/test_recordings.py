@@ -129,3 +129,67 @@ def test_time_offset_moves_the_telemetry_onto_the_frames_clock(tmp_path):
     # the same given when the recording is opened (--time-offset), before interpolating
     roll = np.degrees(open_source(folder, time_offset_s=0.5).inertial.roll_rad)
     assert roll[14] == pytest.approx(0.0) and roll[15] == pytest.approx(10.0)
+
+
+# ---------------------------------------------------------------- issue 15 item 4: variable frame rate
+def _encode_h264(folder, images, times_s, name="flight.mp4"):
+    """An H.264 MP4 whose frames carry ``times_s`` (multiples of 0.04 s: a 25 Hz camera that drops
+    frames), by ffmpeg's concat demuxer with per-image durations."""
+    import subprocess
+
+    import cv2
+    import imageio_ffmpeg
+    lines = []
+    for k, image in enumerate(images):
+        cv2.imwrite(str(folder / f"img{k:03d}.png"), image)
+        duration = times_s[k + 1] - times_s[k] if k + 1 < len(times_s) else 0.04
+        lines += [f"file 'img{k:03d}.png'", f"duration {duration:.6f}"]
+    (folder / "list.txt").write_text("\n".join(lines) + "\n")
+    subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-loglevel", "error", "-f", "concat", "-safe", "0",
+                    "-i", str(folder / "list.txt"), "-fps_mode", "vfr", "-c:v", "libx264", "-pix_fmt", "yuv420p",
+                    str(folder / name)], check=True)
+    return folder / name
+
+
+def _level_telemetry(path, duration_s=3.0):
+    from visland.contracts import TELEMETRY_COLUMNS, write_csv
+    t = np.arange(0.0, duration_s, 0.02)
+    zeros = np.zeros_like(t)
+    values = {"t_s": t, "roll_deg": zeros, "pitch_deg": zeros + 2.0, "heading_deg": 90.0 + 10.0 * t, "p_dps": zeros,
+              "q_dps": zeros, "r_dps": zeros + 10.0, "vn_mps": zeros, "ve_mps": zeros + 70.0, "vd_mps": zeros + 3.5}
+    write_csv(path, values, TELEMETRY_COLUMNS)
+
+
+def test_a_video_of_variable_frame_rate_takes_its_frame_times_from_the_container(tmp_path):
+    from visland.datasets.sources import VideoSource
+    times = [0.0, 0.04, 0.12, 0.16, 0.36, 0.40, 0.44, 0.60, 0.64, 1.00]       # dropped frames, a 0.36 s gap
+    images = [np.full((48, 64, 3), 20 * k, np.uint8) for k in range(len(times))]
+    video = _encode_h264(tmp_path, images, times)
+    CameraModel.from_fov(64, 48, 50.0).save(tmp_path / "camera.json")
+    _level_telemetry(tmp_path / "telemetry.csv")
+    source = VideoSource(video)
+    assert len(source) == len(times)
+    assert np.allclose(source.times_s, times, atol=1e-3)
+    assert source.timing.startswith("variable frame rate: frame times from the container's timestamps")
+    # the inertial data are interpolated at those times, not at k / fps (heading 90 + 10 t deg)
+    assert np.allclose(np.degrees(source.inertial.heading_rad), 90.0 + 10.0 * np.asarray(times), atol=0.02)
+    decoded = [int(round(float(image.mean()))) for _, image, _ in source.frames(gray=True)]
+    assert decoded == pytest.approx([20 * k for k in range(len(times))], abs=3)
+    # --fps overrides the container (the user knows better), and says so
+    forced = VideoSource(video, fps=25.0)
+    assert np.allclose(forced.times_s, np.arange(len(times)) / 25.0) and forced.timing == "frame times from --fps 25"
+
+
+def test_a_video_of_constant_frame_rate_keeps_exact_times(tmp_path):
+    import cv2
+
+    from visland.datasets.sources import VideoSource
+    writer = cv2.VideoWriter(str(tmp_path / "cfr.avi"), cv2.VideoWriter_fourcc(*"MJPG"), 5.0, (64, 48))
+    for k in range(12):
+        writer.write(np.full((48, 64, 3), 10 * k, np.uint8))
+    writer.release()
+    CameraModel.from_fov(64, 48, 50.0).save(tmp_path / "camera.json")
+    _level_telemetry(tmp_path / "telemetry.csv")
+    source = VideoSource(tmp_path / "cfr.avi")
+    assert np.array_equal(source.times_s, np.arange(12) / 5.0)
+    assert source.timing == "frame times from the video's constant frame rate (5 frames/s)"
