@@ -22,6 +22,9 @@ calibration     issue 12: camera mount pitch/roll errors (+-0.5 deg) and runway 
                 (visland.estimation.calibration); also its estimate 1 km out against the truth
 ecc             ECC'15: the three landings ecc-1..3 with 1 % measurement noise, ecc-hg and ecc-hosm
 academic        seed 001: the single-point observer on its academic example (eq. 14-16)
+dickmanns       seed 004: dickmanns-4d (with and without airspeed) beside ekf-2l and ccpi-hg-2p on the 8
+                scenarios, 1 px; and on dickmanns-wind against the seed's accuracy
+                (:mod:`visland.estimation.dickmanns_study`)
 ==============  ===========================================================================
 
 Each prints its table with the thesis's figure beside each of ours (``!`` marks a figure more
@@ -144,6 +147,9 @@ STUDIES = {
         kind="calibration"),
     "ecc": StudySpec("ecc", "ECC'15: three landings, 1 % measurement noise", ("ecc-hg", "ecc-hosm"),
                      (Condition("1 % noise", relative_noise=0.01),), scenarios=ECC_SCENARIOS, kind="ecc"),
+    "dickmanns": StudySpec("dickmanns", "seed 004: the 4D approach beside the thesis's observers, 1 px noise",
+                           ("dickmanns-4d", "ekf-2l", "ccpi-hg-2p"), (Condition("1 px", pixel_noise_px=1.0),),
+                           kind="dickmanns"),
     "academic": StudySpec("academic", "seed 001: single-point observer, academic example", (),
                           (Condition("ideal"), Condition("1 % noise", relative_noise=0.01)), scenarios=(),
                           kind="academic"),
@@ -266,6 +272,9 @@ def run_study(name: str, out_dir=None, seed: int = 0, heading: str = "dF", echo=
     started = time.perf_counter()
     if spec.kind == "academic":
         figures = _academic_study(spec, out, echo)
+    elif spec.kind == "dickmanns":
+        from visland.estimation.dickmanns_study import dickmanns_study
+        figures = dickmanns_study(out, seed, echo)
     elif spec.kind == "ecc":
         figures = _ecc_study(spec, out, seed, echo, heading)
     elif spec.kind == "calibration":
