@@ -237,6 +237,15 @@ class DetectorParams(ParamsFile):
     parallel_score_ratio, parallel_min_width_ratio : float
         Of strips side by side, a wider one (by this ratio) scoring at least this fraction of the
         other's score is put first (a runway is wider than its parallel taxiway).
+    parallel_min_gap : float
+        ... and only if its edges step the same way and ground at least this fraction of the
+        narrower strip's width lies between them (the ground between a runway and its taxiway,
+        bounded by their facing edges, is not a wider strip to prefer). Two hypotheses sharing an
+        edge (within this fraction of the narrower width) with reversed steps are a strip and
+        the ground beside it.
+    ground_between_margin : float
+        Of those two, the one whose inside is nearer the ground's grey level by this much more
+        (in units of the larger edge step) is the ground and goes after the other.
     strip_min_interior, strip_max_outside_gap, strip_max_spread : float
         A convincing strip: inside-outside difference at least ``strip_min_interior`` of its
         edges' step, the two outsides within ``strip_max_outside_gap`` of that difference, the
@@ -440,6 +449,8 @@ class DetectorParams(ParamsFile):
     strip_end_clearance_px: float = 3.0
     parallel_score_ratio: float = 0.3
     parallel_min_width_ratio: float = 1.3
+    parallel_min_gap: float = 0.25
+    ground_between_margin: float = 0.5
     strip_min_interior: float = 0.5
     strip_max_outside_gap: float = 0.5
     strip_max_spread: float = 1.5
@@ -536,6 +547,7 @@ class DetectorParams(ParamsFile):
         "strip_level_fraction": (0.0, 10.0), "ground_level_fraction": (0.0, 10.0),
         "strip_end_rows": (1, 1000, "int"), "strip_end_clearance_px": (0.0, 1000.0),
         "parallel_score_ratio": (0.0, 10.0), "parallel_min_width_ratio": (1.0, 100.0),
+        "parallel_min_gap": (0.0, 100.0), "ground_between_margin": (0.0, 100.0),
         "strip_min_interior": (0.0, 10.0), "strip_max_outside_gap": (0.0, 100.0), "strip_max_spread": (0.0, 100.0),
         "enclosing_centre_tolerance": (0.0, 10.0), "enclosing_max_width_ratio": (1.0, 100.0),
         "enclosing_score_ratio": (0.0, 10.0),

@@ -142,6 +142,7 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
     hypotheses.sort(key=lambda h: -h.score)
     hypotheses = _prefer_enclosing(hypotheses, params)
     hypotheses = _prefer_widest_parallel(hypotheses, params)
+    hypotheses = _ground_between_strips_last(hypotheses, params)
     return hypotheses[:params.max_hypotheses]
 
 
@@ -205,10 +206,14 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
     pre_score = (length_term * np.minimum(c_l, c_r) * (params.score_symmetry_floor + symmetry) * prior
                  * quick_interior * (params.score_outside_floor + quick_outside) * np.sqrt(width))
     hypotheses = []
+    # the ground's grey level row by row: the median over the whole width of the pencil (every
+    # slope the search allows, a few hundred metres either side), where fields and grass are the
+    # majority and a paved strip is a minority
+    ground_rows = row_quantile(rect.values[:, ::4], 0.5)
     for p in np.argsort(-pre_score)[:params.pair_max_examined]:
         if pre_score[p] <= 0:
             continue
-        inside = _inside_evidence(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p], params)
+        inside = _inside_evidence(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p], params, ground_rows)
         contrast = max(float(min(c_l[p], c_r[p])), 1.0)
         # inside darker than outside when the left edge darkens towards +s, and vice versa;
         # a runway's inside differs from its outside by about its edges' step
@@ -240,23 +245,27 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
             evidence={"symmetry": float(symmetry[p]), "contrast": contrast, "interior": inside["interior"],
                       "outside_gap": inside["outside_gap"], "spread": inside["spread"],
                       "centre_rows": inside["centre_rows"], "ends": ends, "prior": float(prior[p]),
+                      "inside_minus_ground": inside["inside_minus_ground"],
                       "length_px": float(length[p]),
                       "width_k": float(width[p])}))
     return hypotheses
 
 
 def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: float, d_near: float,
-                     params: DetectorParams) -> dict:
+                     params: DetectorParams, ground_rows: np.ndarray | None = None) -> dict:
     """What lies between and beside a pair of edges, from the rectified image.
 
     Returns a dict: ``interior`` (median grey inside minus outside), ``outside_gap`` (median
     grey outside the left edge minus outside the right edge), ``spread`` (interquartile range
     inside), ``centre_polarity`` and ``centre_rows`` (fraction of rows holding a stripe on
-    the midline). A runway's inside is one surface (markings in the minority) with the same
+    the midline), ``inside_minus_ground`` (median grey inside minus the median of
+    ``ground_rows``, the ground's level per row of ``rect``, over the same rows; NaN without
+    them). A runway's inside is one surface (markings in the minority) with the same
     ground on both sides; its centre line is a stripe in most rows (dashes included), where
     texture would make one in a few.
     """
-    empty = {"interior": 0.0, "outside_gap": math.inf, "spread": math.inf, "centre_polarity": 0, "centre_rows": 0.0}
+    empty = {"interior": 0.0, "outside_gap": math.inf, "spread": math.inf, "centre_polarity": 0, "centre_rows": 0.0,
+             "inside_minus_ground": math.nan}
     rows = rect.rows_between(d_far, d_near)
     if rows.sum() < 2:
         return empty
@@ -279,8 +288,10 @@ def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: fl
         return empty
     q25, q50, q75 = np.percentile(inside, [25, 50, 75])
     m_left, m_right = float(np.median(out_left)), float(np.median(out_right))
+    ground = finite_median(ground_rows[rows]) if ground_rows is not None else math.nan
     result = {"interior": float(q50 - 0.5 * (m_left + m_right)), "outside_gap": m_left - m_right,
-              "spread": float(q75 - q25), "centre_polarity": 0, "centre_rows": 0.0}
+              "spread": float(q75 - q25), "centre_polarity": 0, "centre_rows": 0.0,
+              "inside_minus_ground": float(q50 - ground)}
     # centre stripe: per row, the mean near the midline against the mean a little farther out on
     # either side
     centre = int(rect.column_of(0.5 * (k_left + k_right)))
@@ -381,7 +392,7 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], params: Detector
             width = h.k_right - h.k_left
             rivals = [r for r in remaining
                       if abs(r.s0 - h.s0) < 1e-6 and r.score >= params.parallel_score_ratio * h.score and is_strip(r)
-                      and (r.k_left >= h.k_right or r.k_right <= h.k_left)
+                      and _side_by_side(h, r, params.parallel_min_gap * width)
                       and (r.k_right - r.k_left) > params.parallel_min_width_ratio * width]
             if rivals:
                 widest = max(rivals, key=lambda r: r.k_right - r.k_left)
@@ -390,6 +401,63 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], params: Detector
                 h = widest
         ordered.append(h)
     return ordered
+
+
+def _ground_between_strips_last(hypotheses: list[RunwayHypothesis],
+                                params: DetectorParams) -> list[RunwayHypothesis]:
+    """Put the ground between two paved strips after the strip it touches.
+
+    Between a runway and a parallel taxiway lies a band of grass bounded by their facing edges:
+    a pair of edges of opposite steps meeting on the same horizon point, as long as the runway,
+    uniform inside, wider than the runway, and one of its edges is the runway's. Two such
+    hypotheses that share an edge with their steps reversed are a strip and the ground beside
+    it; the one whose inside has the ground's grey level (``inside_minus_ground``: the median of
+    the whole pencil's rows, where fields and grass are the majority) is the ground. It is
+    moved just after the other, which is moved ahead wherever it was ranked (if it scores at
+    least ``params.parallel_score_ratio`` of it). Without that evidence nothing moves.
+    """
+    out = list(hypotheses)
+    i = 0
+    while i < len(out):
+        h = out[i]
+        width_h = h.k_right - h.k_left
+        for j in range(i + 1, len(out)):
+            r = out[j]
+            width_r = r.k_right - r.k_left
+            tolerance = params.parallel_min_gap * min(width_h, width_r)
+            touching = abs(r.k_left - h.k_right) <= tolerance or abs(r.k_right - h.k_left) <= tolerance
+            if not (abs(r.s0 - h.s0) < 1e-6 and touching and r.score >= params.parallel_score_ratio * h.score
+                    and (r.polarity_left, r.polarity_right) == (-h.polarity_left, -h.polarity_right)):
+                continue
+            scale = max(h.evidence.get("contrast", 1.0), r.evidence.get("contrast", 1.0), 1.0)
+            h_ground = abs(h.evidence.get("inside_minus_ground", math.nan)) / scale
+            r_ground = abs(r.evidence.get("inside_minus_ground", math.nan)) / scale
+            if h_ground + params.ground_between_margin < r_ground:     # NaN: no decision
+                out.insert(i, out.pop(j))
+                break
+        i += 1
+    return out
+
+
+def _side_by_side(h: RunwayHypothesis, r: RunwayHypothesis, min_gap_k: float) -> bool:
+    """Whether ``r`` is another paved strip beside ``h``: the same two materials (its edges step
+    the same way, so its inside is brighter or darker than the ground like ``h``'s), with ground
+    between them at least ``min_gap_k`` wide (in ``k``, width over height).
+
+    The ground between a runway and its parallel taxiway is itself bounded by two edges of
+    opposite steps and looks like a strip, wider than either, that shares one edge with each:
+    its steps are the runway's reversed (grass brighter than the asphalt beside it), and it
+    touches the runway. Neither holds for a parallel taxiway, whose edge lies a strip of
+    ground away (ICAO Annex 14: at least about 1.4 runway widths even for the smallest
+    runways), with the runway's polarities.
+    """
+    if (r.polarity_left, r.polarity_right) != (h.polarity_left, h.polarity_right):
+        return False
+    if r.k_left >= h.k_right:
+        return r.k_left - h.k_right >= min_gap_k
+    if r.k_right <= h.k_left:
+        return h.k_left - r.k_right >= min_gap_k
+    return False
 
 
 def _prefer_enclosing(hypotheses: list[RunwayHypothesis], params: DetectorParams) -> list[RunwayHypothesis]:
