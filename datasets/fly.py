@@ -16,9 +16,9 @@ At every step of the flight model (50 Hz; a camera frame every other step at 25 
 4. below the flare height (main gear, :class:`visland.flight.FlareParams`) the flare law takes
    over, its height from the vision estimate or from a simulated radio altimeter (true height
    plus white noise, valid below 50 ft) (``--flare-height-source``);
-5. a monitor decides at 200 ft and at 100 ft (true height: the radio altimeter's call-outs)
+5. a monitor decides at 400, 200 and 100 ft (true height: the radio altimeter's call-outs)
    whether to continue: the detection's success and confidence over the last second, the
-   observer's coasting, and the disagreement between the point observer and a line observer
+   observer's coasting, its observability index (thesis 3.30), and the disagreement between the point observer and a line observer
    (``ekf-2l``) on dH and dY. A go-around is flown (wings level, climb) and counted.
 
 The run ends at main-gear touchdown (or a few seconds into a go-around) with one JSON line.
@@ -42,15 +42,26 @@ RADIO_ALTIMETER_MAX_M = 50 * FT_TO_M
 
 @dataclass(frozen=True)
 class MonitorParams:
-    """Continue-or-go-around rule at the decision heights (see the module docstring)."""
+    """Continue-or-go-around rule at the decision heights (see the module docstring).
 
-    decision_heights_ft: tuple = (200.0, 100.0)
-    window_s: float = 1.0                 # how far back detection is judged
+    At each decision height (true height, the radio altimeter's call-out), in this order: the
+    detection over the last ``window_s`` (found fraction, median confidence), the guidance
+    observer's time since its last correction, its observability index (thesis 3.30,
+    ``O = |Phi|^2`` for two points: the median over the window of the values on corrected steps
+    must reach ``min_observability``; a weakly excited observer's height is its initial guess,
+    whatever the other checks say), then its agreement with the line observer on dH and dY.
+    """
+
+    decision_heights_ft: tuple = (400.0, 200.0, 100.0)
+    window_s: float = 1.0                 # how far back detection and observability are judged
     min_found_fraction: float = 0.8       # of the frames in the window
     min_confidence: float = 0.5           # median confidence of the found frames in the window
     max_dh_disagreement_m: float = 3.0    # |dH points - dH lines|, or 5 % of dH if larger
+    dh_disagreement_fraction_400ft: float = 0.10   # ... 10 % at 400 ft: the line observer converges later
     max_dy_disagreement_m: float = 3.0    # |dY points - dY lines|
+    max_dy_disagreement_400ft_m: float = 6.0       # ... at 400 ft
     max_coast_s: float = 0.5              # the guidance observer's time since its last correction
+    min_observability: float = 30.0       # median O of the guidance observer's corrected steps in the window
 
 
 @dataclass(frozen=True)
@@ -192,6 +203,9 @@ class _Tracked:
         self.started = False
         self.last_correction_s = math.nan
         self.dx_m = self.dy_m = self.dh_m = math.nan
+        self.observability = math.nan
+        self.coast_reason = ""
+        self.observability_log = []        # (t, O) on corrected steps
         self._last_yv = None
 
     def step(self, inp, dh0_m):
@@ -208,8 +222,15 @@ class _Tracked:
         else:
             estimate = obs.step(inp)
             self.dh_m = estimate.dh_m
+            self.observability = float(estimate.observability)
             if not estimate.coasting:
                 self.last_correction_s = inp.t_s
+                if math.isfinite(self.observability):
+                    self.observability_log.append((float(inp.t_s), self.observability))
+                    if len(self.observability_log) > 400:
+                        del self.observability_log[:200]
+            else:
+                self.coast_reason = estimate.reason or ""
         if obs.features == "points":
             # as visland.estimation.runner: the observer's own corners unless it says they lag the measured ones
             if inp.points_yv is not None:
@@ -286,7 +307,9 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
     flaring = False
     dh_err_100 = math.nan
     deviations_at = {}
-    heights_pending = sorted(options.monitor.decision_heights_ft, reverse=True)
+    # a decision height the approach starts below is not called out (no detection history to judge yet)
+    h_start = -model.current().p_runway_m[2]
+    heights_pending = sorted((h for h in options.monitor.decision_heights_ft if h * FT_TO_M < h_start), reverse=True)
     log_heights = [400.0, 200.0, 100.0, 50.0]
     measure_s = estimate_s = 0.0
     frozen_image = None
@@ -358,8 +381,10 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
         # ---- monitor at the decision heights
         if not go_around and heights_pending and h_true <= heights_pending[0] * FT_TO_M:
             h_ft = heights_pending.pop(0)
-            ok, why = _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true)
+            ok, why = _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true, h_ft)
             decisions.append({"height_ft": h_ft, "t_s": round(t, 3), "continue": ok, "reason": why,
+                              "observability": _r(_recent_observability(guide_obs, t, options.monitor.window_s)),
+                              "coast_s": _r(t - guide_obs.last_correction_s),
                               "dh_true_m": round(h_true, 3), "dy_true_m": round(float(state.p_runway_m[1]), 3),
                               "dh_points_m": _r(guide_obs.dh_m), "dy_points_m": _r(guide_obs.dy_m),
                               "dh_lines_m": _r(monitor_obs.dh_m), "dy_lines_m": _r(monitor_obs.dy_m)})
@@ -424,7 +449,13 @@ def _flare_height(options, dh_seen, gear_h_true, h_true, model, rng):
     return dh_seen - offset
 
 
-def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true):
+def _recent_observability(tracked, t, window_s):
+    """Median observability index of ``tracked``'s corrected steps in the last ``window_s`` (NaN if none)."""
+    values = [o for (to, o) in tracked.observability_log if t - to <= window_s + 1e-9]
+    return float(np.median(values)) if values else math.nan
+
+
+def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true, h_ft=200.0):
     """(continue?, reason): the rule of :class:`MonitorParams`."""
     m = options.monitor
     recent = [(found, conf) for (tf, found, conf) in frames_log if t - tf <= m.window_s + 1e-9]
@@ -439,13 +470,19 @@ def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true):
         return False, f"no estimate from {guide_obs.observer.name}"
     if t - guide_obs.last_correction_s > m.max_coast_s:
         return False, f"{guide_obs.observer.name} coasting for {t - guide_obs.last_correction_s:.1f} s"
+    o = _recent_observability(guide_obs, t, m.window_s)
+    if not o >= m.min_observability:
+        return False, (f"{guide_obs.observer.name}'s observability index {o:.3g} over the last {m.window_s:g} s "
+                       f"< {m.min_observability:g}")
     if monitor_obs.started and math.isfinite(monitor_obs.dh_m):
-        limit = max(m.max_dh_disagreement_m, 0.05 * guide_obs.dh_m)
+        fraction = m.dh_disagreement_fraction_400ft if h_ft >= 300.0 else 0.05
+        limit = max(m.max_dh_disagreement_m, fraction * guide_obs.dh_m)
         gap = abs(guide_obs.dh_m - monitor_obs.dh_m)
         if gap > limit:
             return False, (f"dH of {guide_obs.observer.name} and {monitor_obs.observer.name} differ by {gap:.1f} m "
                            f"(> {limit:.1f} m)")
-        if math.isfinite(monitor_obs.dy_m) and abs(guide_obs.dy_m - monitor_obs.dy_m) > m.max_dy_disagreement_m:
+        dy_limit = m.max_dy_disagreement_400ft_m if h_ft >= 300.0 else m.max_dy_disagreement_m
+        if math.isfinite(monitor_obs.dy_m) and abs(guide_obs.dy_m - monitor_obs.dy_m) > dy_limit:
             return False, (f"dY of {guide_obs.observer.name} and {monitor_obs.observer.name} differ by "
                            f"{abs(guide_obs.dy_m - monitor_obs.dy_m):.1f} m")
     return True, "estimates consistent"
@@ -471,35 +508,50 @@ def monte_carlo_cases(n: int, seed: int = 0):
     return cases
 
 
-def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print) -> dict:
-    """Fly ``n`` cases on the estimates and on the truth; write ``landings.csv`` and
-    ``touchdowns.png`` into ``out_dir``; return the summary (the JSON line)."""
+def guidance_sources(options: FlyOptions) -> tuple:
+    """What each Monte Carlo case is flown on: ``options.measure`` (the estimates on detected or
+    simulated features), the ideal-measurement loop (exact features + pixel noise) when that is
+    not already the first, and the truth (the baseline)."""
+    return (options.measure,) + (("simulated",) if options.measure != "simulated" else ()) + ("truth",)
+
+
+def _options_for(options: FlyOptions, source: str, seed: int) -> FlyOptions:
     from dataclasses import replace
+    if source == "truth":
+        return replace(options, truth_guided=True, measure="simulated", seed=seed)
+    return replace(options, truth_guided=False, measure=source, seed=seed)
+
+
+def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print) -> dict:
+    """Fly ``n`` cases on each of :func:`guidance_sources`; write ``landings.csv`` and
+    ``touchdowns.png`` into ``out_dir``; return the summary (the JSON line).
+
+    Each flight's JSON is kept in ``out_dir/runs/`` (written atomically) and not flown again when
+    the command is re-run: a campaign stopped part-way resumes where it stopped."""
+    import json
     from pathlib import Path
-    from visland.contracts import write_csv
+    from visland.contracts import atomic_write_text, json_ready, write_csv
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise ValueError(f"--monte-carlo must be a positive number of cases, got {n!r}")
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    (out / "runs").mkdir(parents=True, exist_ok=True)
     rows = []
     for scenario, seed in monte_carlo_cases(n, options.seed):
-        for truth in (False, True):
-            r = fly(scenario, replace(options, truth_guided=truth, seed=seed))
-            dev = r["deviations"]
-            rows.append({"case": scenario.name, "truth_guided": int(truth), "crosswind_mps": scenario.wind.crosswind_mps,
-                         "gust": int(scenario.wind.gust), "touchdown_x_m": r["touchdown_x_m"],
-                         "touchdown_y_m": r["touchdown_y_m"], "sink_rate_mps": r["sink_rate_mps"],
-                         "go_around": int(r["go_around"]), "go_around_reason": r["go_around_reason"],
-                         "dh_err_100ft_m": r["dh_err_100ft_m"],
-                         **{f"{q}_{h}_m": (dev.get(h) or {}).get(q) for h in ("200ft", "100ft", "50ft")
-                            for q in ("dy", "dgs")},
-                         "wall_s": r["wall_s"]})
-            echo(f"{scenario.name} {'truth' if truth else 'vision'}: " + (
+        for source in guidance_sources(options):
+            tag = f"{source}-{options.size}px" if source == "detection" else source
+            path = out / "runs" / f"{scenario.name}-{tag}.json"
+            if path.exists():
+                r = json.loads(path.read_text())
+            else:
+                r = json_ready(fly(scenario, _options_for(options, source, seed)))
+                atomic_write_text(path, json.dumps(r) + "\n")
+            rows.append(_landing_row(scenario, source, r))
+            echo(f"{scenario.name} {source}: " + (
                 f"go-around ({r['go_around_reason']})" if r["go_around"] else
                 f"touchdown x {r['touchdown_x_m']:.0f} m, y {r['touchdown_y_m']:+.2f} m, sink {r['sink_rate_mps']:.2f} m/s"
                 if r["touchdown_x_m"] is not None else "no touchdown") + f" ({r['wall_s']:.0f} s)")
-    columns = {k: [row[k] if row[k] is not None else math.nan for row in rows] for k in rows[0]}
-    write_csv(out / "landings.csv", columns, list(rows[0]))
+            columns = {k: [row[k] if row[k] is not None else math.nan for row in rows] for k in rows[0]}
+            write_csv(out / "landings.csv", columns, list(rows[0]))
     summary = _monte_carlo_summary(rows)
     _plot_touchdowns(rows, out / "touchdowns.png")
     summary["landings_csv"] = str(out / "landings.csv")
@@ -507,23 +559,51 @@ def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print) -> dict:
     return summary
 
 
+def _landing_row(scenario, source, r) -> dict:
+    dev = r["deviations"]
+    decisions = {f"{d['height_ft']:g}": d for d in r["decisions"]}
+    return {"case": scenario.name, "guidance": source, "truth_guided": int(source == "truth"),
+            "crosswind_mps": scenario.wind.crosswind_mps, "gust": int(scenario.wind.gust),
+            "touchdown_x_m": r["touchdown_x_m"], "touchdown_y_m": r["touchdown_y_m"],
+            "sink_rate_mps": r["sink_rate_mps"], "go_around": int(r["go_around"]),
+            "go_around_reason": r["go_around_reason"], "dh_err_100ft_m": r["dh_err_100ft_m"],
+            **{f"{q}_{h}_m": (dev.get(h) or {}).get(q) for h in ("200ft", "100ft", "50ft") for q in ("dy", "dgs")},
+            "observability_400ft": (decisions.get("400") or {}).get("observability"),
+            "frames": r["frames"], "measure_s": r["measure_s"], "estimate_s": r["estimate_s"], "wall_s": r["wall_s"]}
+
+
 def _monte_carlo_summary(rows) -> dict:
-    vision = [r for r in rows if not r["truth_guided"]]
-    truth = {r["case"]: r for r in rows if r["truth_guided"]}
-    landed = [r for r in vision if not r["go_around"] and r["touchdown_x_m"] is not None]
-    in_window = [r for r in landed if 60.0 <= r["touchdown_x_m"] <= 823.0]
-    along = [r["touchdown_x_m"] - truth[r["case"]]["touchdown_x_m"] for r in landed
-             if truth[r["case"]]["touchdown_x_m"] is not None]
-    dy = [abs(r["touchdown_y_m"]) for r in landed]
-    return {"n_cases": len(vision), "landed": len(landed), "in_window": len(in_window),
-            "go_arounds": sum(r["go_around"] for r in vision),
-            "go_around_reasons": [r["go_around_reason"] for r in vision if r["go_around"]],
-            "touchdown_dy_p95_m": float(np.percentile(dy, 95)) if dy else None,
+    """Per guidance source: landings, go-arounds and why, touchdown mean and standard deviation
+    along and across the runway; for the estimates, the touchdown along the runway against the
+    truth-guided run of the same case."""
+    truth = {r["case"]: r for r in rows if r["guidance"] == "truth"}
+    summary = {"n_cases": len({r["case"] for r in rows})}
+    for source in dict.fromkeys(r["guidance"] for r in rows):
+        runs = [r for r in rows if r["guidance"] == source]
+        landed = [r for r in runs if not r["go_around"] and r["touchdown_x_m"] is not None]
+        x = np.array([r["touchdown_x_m"] for r in landed])
+        y = np.array([r["touchdown_y_m"] for r in landed])
+        along = [r["touchdown_x_m"] - truth[r["case"]]["touchdown_x_m"] for r in landed
+                 if r["case"] in truth and truth[r["case"]]["touchdown_x_m"] is not None
+                 and not truth[r["case"]]["go_around"]] if source != "truth" else []
+        dh100 = [abs(r["dh_err_100ft_m"]) for r in landed if r["dh_err_100ft_m"] is not None]
+        frames = sum(r["frames"] for r in runs)
+        summary[source] = {
+            "flights": len(runs), "landed": len(landed),
+            "in_window": int(np.sum((x >= 60.0) & (x <= 823.0))) if len(x) else 0,
+            "go_arounds": sum(r["go_around"] for r in runs),
+            "go_around_reasons": [f"{r['case']}: {r['go_around_reason']}" for r in runs if r["go_around"]],
+            "touchdown_x_mean_m": float(x.mean()) if len(x) else None,
+            "touchdown_x_std_m": float(x.std(ddof=1)) if len(x) > 1 else None,
+            "touchdown_y_mean_m": float(y.mean()) if len(y) else None,
+            "touchdown_y_std_m": float(y.std(ddof=1)) if len(y) > 1 else None,
+            "touchdown_dy_p95_m": float(np.percentile(np.abs(y), 95)) if len(y) else None,
             "touchdown_dx_vs_truth_max_abs_m": float(np.max(np.abs(along))) if along else None,
             "sink_rate_max_mps": float(max(r["sink_rate_mps"] for r in landed)) if landed else None,
-            "dh_err_100ft_max_abs_m": float(max(abs(r["dh_err_100ft_m"]) for r in landed
-                                                if r["dh_err_100ft_m"] is not None)) if landed else None,
-            "wall_s_per_landing": float(np.mean([r["wall_s"] for r in rows]))}
+            "dh_err_100ft_max_abs_m": float(max(dh100)) if dh100 else None,
+            "wall_s_per_flight": float(np.mean([r["wall_s"] for r in runs])),
+            "measure_ms_per_frame": 1000.0 * sum(r["measure_s"] for r in runs) / frames if frames else None}
+    return summary
 
 
 def _plot_touchdowns(rows, path) -> None:
@@ -534,12 +614,15 @@ def _plot_touchdowns(rows, path) -> None:
     fig, ax = plt.subplots(figsize=(9, 3.2))
     ax.add_patch(plt.Rectangle((0, -22.5), 1000, 45, fill=False, color="0.3"))
     ax.axvspan(60, 823, color="tab:green", alpha=0.08, label="CS-AWO window 60-823 m")
-    for truth, colour, label in ((True, "0.5", "truth-guided"), (False, "tab:blue", "vision-guided")):
+    styles = {"truth": ("0.5", "x", "truth-guided"), "simulated": ("tab:orange", "+", "ideal features + noise"),
+              "detection": ("tab:blue", "o", "rendered frames, detection")}
+    for source in dict.fromkeys(r["guidance"] for r in rows):
+        colour, marker, label = styles.get(source, ("tab:red", "s", source))
         pts = [(r["touchdown_x_m"], r["touchdown_y_m"]) for r in rows
-               if r["truth_guided"] == int(truth) and r["touchdown_x_m"] is not None and not r["go_around"]]
+               if r["guidance"] == source and r["touchdown_x_m"] is not None and not r["go_around"]]
         if pts:
             x, y = zip(*pts)
-            ax.scatter(x, y, s=14, color=colour, label=f"{label} ({len(pts)})", marker="o" if not truth else "x")
+            ax.scatter(x, y, s=14, color=colour, label=f"{label} ({len(pts)})", marker=marker)
     ax.set_xlim(0, 1000)
     ax.set_ylim(-25, 25)
     ax.set_xlabel("x from the threshold (m)")
