@@ -108,6 +108,8 @@ def _cmd_fly(args) -> int:
         print(json.dumps(json_ready(summary)))
         return 0
     result = fly(resolve_scenario(args.scenario), options)
+    if result["envelope"]["report"]:
+        print(result["envelope"]["report"])
     print(json.dumps(json_ready(result)))
     return 0
 

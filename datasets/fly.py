@@ -65,6 +65,16 @@ class MonitorParams:
 
 
 @dataclass(frozen=True)
+class StabilisedGate:
+    """Where an approach must be stabilised for the flight-envelope report: at ``height_ft``
+    (true height) within ``max_dgs_m`` of the glide path and ``max_dy_m`` of the centreline."""
+
+    height_ft: float = 400.0
+    max_dgs_m: float = 5.0
+    max_dy_m: float = 10.0
+
+
+@dataclass(frozen=True)
 class FlyOptions:
     """What ``visland fly`` flies (see its --help)."""
 
@@ -84,6 +94,7 @@ class FlyOptions:
     detection_lost_below_ft: float | None = None     # fault: the detector loses the runway below this height
     frozen_frames_at_ft: float | None = None         # fault: the frame stream freezes for 1 s at this height
     monitor: MonitorParams = field(default_factory=MonitorParams)
+    gate: StabilisedGate = field(default_factory=StabilisedGate)
     flare: FlareParams = field(default_factory=FlareParams)
 
     def __post_init__(self):
@@ -311,6 +322,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
     h_start = -model.current().p_runway_m[2]
     heights_pending = sorted((h for h in options.monitor.decision_heights_ft if h * FT_TO_M < h_start), reverse=True)
     log_heights = [400.0, 200.0, 100.0, 50.0]
+    envelope = _EnvelopeLog(options.gate, h_start)
     measure_s = estimate_s = 0.0
     frozen_image = None
     frozen_until = None
@@ -403,7 +415,10 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
             if flaring or flare_h <= options.flare.flare_height_m:
                 flaring = True
                 bank, nz = model.flare_orders(bank, flare_h, math.hypot(*v_seen[:2]), -float(state.v_ned_mps[2]))
+            else:
+                envelope.orders(model.guide.saturated, t, h_true, model.dt)
             orders = (bank, nz)
+        envelope.state(state, h_true, aim, model.guide.tan_gs)
         model.step(*orders)
         k += 1
         if model.touchdown is not None:
@@ -413,6 +428,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
         if h_true < 0.5:
             break
     wall = time.perf_counter() - wall0
+    envelope_report = envelope.report(scenario.name)
     td = model.touchdown
     gear = td["gear_runway_m"] if td else None
     out = {
@@ -427,11 +443,85 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
         "decisions": decisions, "deviations": deviations_at,
         "in_window": bool(gear is not None and 60.0 <= gear[0] <= 823.0 and abs(gear[1]) <= runway.width_m / 2),
         "frames": len(frames_log), "measure_s": round(measure_s, 3), "estimate_s": round(estimate_s, 3),
+        "envelope": envelope_report,
         "wall_s": round(wall, 3),
     }
     if renderer is not None:
         renderer.close()
     return out
+
+
+class _EnvelopeLog:
+    """What the flight-envelope report needs: how long each autopilot limit bound the guidance
+    orders (:attr:`visland.flight._Guidance.saturated`), the deviations at the stabilisation
+    gate, and the extremes of thesis 1.3.2's limits (:data:`visland.flight.FLIGHT_LIMITS`)."""
+
+    def __init__(self, gate: StabilisedGate, h_start_m: float):
+        self.gate = gate
+        self.gate_m = gate.height_ft * FT_TO_M
+        self.gate_applies = h_start_m > self.gate_m
+        self.at_gate = None                  # (dgs_m, dy_m)
+        self.bound = {}                      # limit -> [seconds above the gate, seconds in all, first t, lowest h]
+        self.extremes = {}
+        self._last_roll = None
+
+    def orders(self, saturated, t, h_m, dt):
+        for name in saturated:
+            b = self.bound.setdefault(name, [0.0, 0.0, t, h_m])
+            b[0] += dt if h_m > self.gate_m else 0.0
+            b[1] += dt
+            b[3] = min(b[3], h_m)
+
+    def state(self, state, h_m, aim_m, tan_gs):
+        if self.gate_applies and self.at_gate is None and h_m <= self.gate_m:
+            self.at_gate = (float(h_m + (state.p_runway_m[0] - aim_m) * tan_gs), float(state.p_runway_m[1]))
+        values = {"gamma_deg": math.degrees(state.gamma_rad), "nz_g": state.nz_g, "roll_deg": math.degrees(state.roll_rad)}
+        if self._last_roll is not None:
+            values["roll_rate_dps"] = math.degrees(state.roll_rad - self._last_roll[1]) / max(state.t_s - self._last_roll[0], 1e-9)
+        self._last_roll = (state.t_s, state.roll_rad)
+        for name, v in values.items():
+            lo, hi = self.extremes.get(name, (v, v))
+            self.extremes[name] = (min(lo, v), max(hi, v))
+
+    def report(self, scenario_name: str) -> dict:
+        """``flyable`` (stabilised at the gate and inside thesis 1.3.2's limits), the limits that
+        bound, and one sentence naming the scenario and the violated limit when not flyable."""
+        from visland.flight import FLIGHT_LIMITS
+        g = self.gate
+        exceeded = [f"{name} reached {lo if lo < FLIGHT_LIMITS[name][0] else hi:.1f} (limit {FLIGHT_LIMITS[name][0]:g} .. "
+                    f"{FLIGHT_LIMITS[name][1]:g})" for name, (lo, hi) in self.extremes.items()
+                    if lo < FLIGHT_LIMITS[name][0] - 1e-9 or hi > FLIGHT_LIMITS[name][1] + 1e-9]
+        unstable = []
+        if self.at_gate is not None:
+            dgs, dy = self.at_gate
+            if abs(dgs) > g.max_dgs_m:
+                unstable.append(f"{abs(dgs):.1f} m {'above' if dgs > 0 else 'below'} the glide path")
+            if abs(dy) > g.max_dy_m:
+                unstable.append(f"{abs(dy):.1f} m {'right' if dy > 0 else 'left'} of the centreline")
+        before_gate = sorted(((b[0], name) for name, b in self.bound.items() if b[0] > 0), reverse=True)
+        out = {"flyable": not (exceeded or unstable),
+               "gate_ft": g.height_ft if self.gate_applies else None,
+               "dgs_at_gate_m": _r(self.at_gate[0]) if self.at_gate else None,
+               "dy_at_gate_m": _r(self.at_gate[1]) if self.at_gate else None,
+               "limits_bound": {name: {"s_above_gate": round(b[0], 2), "s": round(b[1], 2), "first_t_s": round(b[2], 2),
+                                       "lowest_ft": round(b[3] / FT_TO_M)} for name, b in self.bound.items()},
+               "flight_limits_exceeded": exceeded, "report": ""}
+        if out["flyable"]:
+            return out
+        parts = []
+        if unstable:
+            parts.append(f"not stabilised at the {g.height_ft:g} ft gate ({' and '.join(unstable)}; the gate allows "
+                         f"{g.max_dgs_m:g} m and {g.max_dy_m:g} m)")
+        if before_gate:
+            seconds, name = before_gate[0]
+            parts.append(f"the limit that bound: the {name} for {seconds:.1f} s before the gate")
+        elif unstable:
+            parts.append("no autopilot limit bound the orders (the guidance had not converged)")
+        if exceeded:
+            parts.append("thesis 1.3.2 limit exceeded: " + "; ".join(exceeded))
+        out["report"] = f"{scenario_name} cannot be flown within the flight envelope: " + ", ".join(parts) + \
+            "; flown anyway."
+        return out
 
 
 def _r(value):

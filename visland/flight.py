@@ -286,6 +286,7 @@ class _Guidance:
         self.gamma_min = math.radians(params.gamma_min_deg)
         self.gamma_max = math.radians(params.gamma_max_deg)
         self.bank_limit = math.radians(params.bank_limit_deg)
+        self.saturated = ()
         self.v_intercept_fraction = math.sin(math.radians(params.intercept_angle_deg))
 
     def update_mode(self, p_runway, v_runway):
@@ -312,6 +313,9 @@ class _Guidance:
         a_cmd = p.k_v_per_s * (ydot_cmd - vy)
         track_rel = math.atan2(vy, vx)
         bank_cmd = math.atan2(a_cmd, G_MPS2 * max(math.cos(track_rel), 0.2))
+        saturated = []
+        if abs(bank_cmd) > self.bank_limit:
+            saturated.append(f"bank order at its {p.bank_limit_deg:g} deg limit")
         bank_cmd = max(-self.bank_limit, min(self.bank_limit, bank_cmd))
         # vertical: G/S capture (from below: altitude hold until the order turns to a descent)
         dx = x - self.aim_m
@@ -322,9 +326,16 @@ class _Guidance:
         if self.vertical_mode == "ALT":
             hdot_cmd = p.k_alt_per_s * (self.altitude_hold_m - dh)
         gamma_cmd = math.asin(max(-0.5, min(0.5, hdot_cmd / self.V)))
+        if gamma_cmd < self.gamma_min:
+            saturated.append(f"flight-path order at its {p.gamma_min_deg:g} deg floor")
+        elif gamma_cmd > self.gamma_max:
+            saturated.append(f"flight-path order at its {p.gamma_max_deg:g} deg ceiling")
         gamma_cmd = max(self.gamma_min, min(self.gamma_max, gamma_cmd))
         nz_cmd = math.cos(gamma) / math.cos(mu) + self.V / G_MPS2 * p.k_gamma_per_s * (gamma_cmd - gamma)
+        if not p.nz_min_g <= nz_cmd <= p.nz_max_g:
+            saturated.append(f"load-factor order at its {p.nz_min_g if nz_cmd < p.nz_min_g else p.nz_max_g:g} g limit")
         nz_cmd = max(p.nz_min_g, min(p.nz_max_g, nz_cmd))
+        self.saturated = tuple(saturated)      # the autopilot limits that bound these orders
         return bank_cmd, nz_cmd
 
 
