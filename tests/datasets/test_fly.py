@@ -59,3 +59,95 @@ def test_fly_command_ends_with_one_json_line_and_refuses_a_line_observer(capsys,
             "dh_err_100ft_m", "wall_s"} <= set(result)
     assert main(["fly", "--scenario", str(scenario), "--observer", "ekf-2l"]) == 2
     assert "two-point observer" in capsys.readouterr().err
+
+
+class _FakeObserver:
+    name = "kf-2p"
+
+
+class _FakeTracked:
+    """The fields of datasets.fly._Tracked that the monitor reads."""
+
+    def __init__(self, dh_m, dy_m, observability_log, started=True):
+        self.observer = _FakeObserver()
+        self.started = started
+        self.dx_m, self.dy_m, self.dh_m = -2000.0, dy_m, dh_m
+        self.last_correction_s = 10.0
+        self.observability_log = observability_log
+
+
+def test_monitor_goes_around_on_a_weak_observability_index_and_judges_400_ft_on_wider_tolerances():
+    from visland.datasets.fly import _monitor
+    options = FlyOptions()
+    frames = [(9.0 + 0.04 * i, True, 0.9) for i in range(26)]          # found in every frame of the last 1 s
+    weak = _FakeTracked(120.0, 0.0, [(9.5, 4.0), (9.8, 6.0), (10.0, 5.0)])     # median 5 < 30
+    ok, why = _monitor(options, frames, 10.0, weak, _FakeTracked(120.0, 0.0, [], started=False), 121.9, 400.0)
+    assert not ok and "observability index 5 " in why
+    # an old, strong value outside the 1 s window does not count
+    stale = _FakeTracked(120.0, 0.0, [(8.0, 900.0), (9.9, 5.0)])
+    assert not _monitor(options, frames, 10.0, stale, _FakeTracked(120.0, 0.0, [], started=False), 121.9, 400.0)[0]
+    strong = [(9.9, 300.0), (10.0, 320.0)]
+    lines = _FakeTracked(129.0, 5.0, [])                  # 9 m (7.5 %) and 5 m away from the points observer
+    assert _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, strong), lines, 121.9, 400.0) == \
+        (True, "estimates consistent")                    # 400 ft: 10 % of dH and 6 m in dY
+    ok, why = _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, strong), lines, 121.9, 200.0)
+    assert not ok and "differ by 9.0 m (> 6.0 m)" in why  # lower: 5 % of dH
+
+
+def test_a_decision_height_the_approach_starts_below_is_not_called_out():
+    """The short approach starts at 1500 m tan 3 deg = 79 m, below 400 ft (122 m): two decisions."""
+    run = fly(_short(), FlyOptions(truth_guided=True, seed=3))
+    assert [d["height_ft"] for d in run["decisions"]] == [200.0, 100.0]
+    assert run["envelope"]["flyable"] and run["envelope"]["gate_ft"] is None and run["envelope"]["report"] == ""
+
+
+@pytest.mark.slow
+def test_ecc3_cannot_be_stabilised_at_400_ft_because_the_flight_path_floor_binds():
+    """Independent bound: flown at the -5.6 deg floor from its start (309.6 m, 100 m above the
+    glide path, 4000 m before the aiming point), ecc-3 comes down to 400 ft with dGS >= 12.6 m,
+    beyond the gate's 5 m; the report must name ecc-3 and the floor."""
+    from visland.scenarios import resolve_scenario
+    scenario = resolve_scenario("ecc-3")
+    tan3, tan_floor = math.tan(math.radians(3.0)), math.tan(math.radians(5.6))
+    h_gate = 400 * 0.3048
+    x_at_gate = scenario.dx_m + (scenario.initial_height_m - h_gate) / tan_floor     # dX when the floor reaches 400 ft
+    dgs_bound = h_gate + x_at_gate * tan3
+    assert dgs_bound == pytest.approx(12.6, abs=0.1)
+    run = fly(scenario, FlyOptions(truth_guided=True, seed=0))
+    env = run["envelope"]
+    assert not env["flyable"] and env["gate_ft"] == 400.0
+    assert env["dgs_at_gate_m"] >= dgs_bound - 0.1
+    assert env["report"].startswith("ecc-3 cannot be flown within the flight envelope")
+    assert "flight-path order at its -5.6 deg floor" in env["report"]
+    assert run["touchdown_x_m"] is not None                  # flown anyway
+
+
+def test_monte_carlo_flies_each_case_on_detection_ideal_features_and_truth_and_resumes(tmp_path, monkeypatch):
+    import visland.datasets.fly as fly_module
+    calls = []
+
+    def fake_fly(scenario, options):
+        source = "truth" if options.truth_guided else options.measure
+        calls.append((scenario.name, source))
+        x = {"detection": 500.0, "simulated": 520.0, "truth": 510.0}[source] + (10.0 if scenario.name.startswith("thesis-2") else 0.0)
+        return {"touchdown_x_m": x, "touchdown_y_m": 1.0 if source == "detection" else 0.0, "sink_rate_mps": 0.8,
+                "go_around": False, "go_around_reason": "", "dh_err_100ft_m": 0.1, "decisions": [], "deviations": {},
+                "frames": 100, "measure_s": 1.0, "estimate_s": 0.5, "wall_s": 2.0}
+
+    monkeypatch.setattr(fly_module, "fly", fake_fly)
+    monkeypatch.setattr(fly_module, "_plot_touchdowns", lambda rows, path: None)
+    options = FlyOptions(measure="detection", size=256)
+    summary = fly_module.monte_carlo(2, options, tmp_path, echo=lambda *_: None)
+    assert calls == [("thesis-1-mc0", "detection"), ("thesis-1-mc0", "simulated"), ("thesis-1-mc0", "truth"),
+                     ("thesis-2-mc1", "detection"), ("thesis-2-mc1", "simulated"), ("thesis-2-mc1", "truth")]
+    det = summary["detection"]
+    assert det["landed"] == 2 and det["touchdown_x_mean_m"] == pytest.approx(505.0)
+    assert det["touchdown_x_std_m"] == pytest.approx(math.sqrt(50.0))          # 500 and 510, n - 1
+    assert det["touchdown_y_mean_m"] == pytest.approx(1.0) and det["touchdown_y_std_m"] == pytest.approx(0.0)
+    assert det["touchdown_dx_vs_truth_max_abs_m"] == pytest.approx(10.0)
+    assert summary["simulated"]["touchdown_dx_vs_truth_max_abs_m"] == pytest.approx(10.0)
+    assert det["measure_ms_per_frame"] == pytest.approx(10.0)
+    assert sorted(p.name for p in (tmp_path / "runs").iterdir())[0] == "thesis-1-mc0-detection-256px.json"
+    calls.clear()
+    again = fly_module.monte_carlo(2, options, tmp_path, echo=lambda *_: None)
+    assert calls == [] and again["detection"] == det                     # resumed from the runs' JSON
