@@ -108,6 +108,7 @@ def _cmd_fly(args) -> int:
         print(json.dumps(json_ready(summary)))
         return 0
     result = fly(resolve_scenario(args.scenario), options)
+    result.pop("trace")          # per-frame detail, kept in --monte-carlo's runs/*.json only
     if result["envelope"]["report"]:
         print(result["envelope"]["report"])
     print(json.dumps(json_ready(result)))

@@ -76,7 +76,7 @@ class _FakeTracked:
         self.observability_log = observability_log
 
 
-def test_monitor_goes_around_on_a_weak_observability_index_and_judges_400_ft_on_wider_tolerances():
+def test_monitor_goes_around_on_a_weak_observability_index_and_judges_agreement_below_300_ft_only():
     from visland.datasets.fly import _monitor
     options = FlyOptions()
     frames = [(9.0 + 0.04 * i, True, 0.9) for i in range(26)]          # found in every frame of the last 1 s
@@ -87,11 +87,11 @@ def test_monitor_goes_around_on_a_weak_observability_index_and_judges_400_ft_on_
     stale = _FakeTracked(120.0, 0.0, [(8.0, 900.0), (9.9, 5.0)])
     assert not _monitor(options, frames, 10.0, stale, _FakeTracked(120.0, 0.0, [], started=False), 121.9, 400.0)[0]
     strong = [(9.9, 300.0), (10.0, 320.0)]
-    lines = _FakeTracked(129.0, 5.0, [])                  # 9 m (7.5 %) and 5 m away from the points observer
+    lines = _FakeTracked(160.0, 5.0, [])                  # 40 m and 5 m away from the points observer
     assert _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, strong), lines, 121.9, 400.0) == \
-        (True, "estimates consistent")                    # 400 ft: 10 % of dH and 6 m in dY
+        (True, "estimates consistent")                    # 400 ft: the line observer is not judged
     ok, why = _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, strong), lines, 121.9, 200.0)
-    assert not ok and "differ by 9.0 m (> 6.0 m)" in why  # lower: 5 % of dH
+    assert not ok and "differ by 40.0 m (> 6.0 m)" in why  # lower: 3 m or 5 % of dH
 
 
 def test_a_decision_height_the_approach_starts_below_is_not_called_out():
