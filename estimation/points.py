@@ -37,7 +37,7 @@ __all__ = [
     "PointsParams", "OJParams", "IIParams", "CCCSParams", "CCPIHGParams", "CCPIHOSMParams", "CCCJParams",
     "OJ2P", "II2P", "CCCS2P", "CCPIHG2P", "CCPIHOSM2P", "CCCJ2P",
     "points_phi", "points_observability", "output_combination", "pseudo_inverse_correction",
-    "levant_correction", "levant_correction_implicit",
+    "levant_correction", "levant_correction_implicit", "virtual_noise_sigma",
 ]
 
 
@@ -142,6 +142,21 @@ def levant_correction_implicit(error: float, lipschitz: float, a1: float, a2: fl
     return sign * a1 * root_l * s, a2 * lipschitz * (sign if magnitude >= layer else error / layer)
 
 
+def virtual_noise_sigma(y, image_sigma_rad: float) -> list:
+    """Standard deviation of each virtual coordinate (thesis 3.23) for an image noise ``image_sigma_rad``.
+
+    ``y_1 = X/Z`` is the cotangent of the depression angle, so an angle error ``sigma`` moves it
+    by ``(1 + y_1^2) sigma``; ``y_2 = Y/Z`` by about ``sqrt(1 + y_1^2) sigma`` (as in
+    :mod:`visland.estimation.kalman`). ``y`` is the flat list ``[y1, y2, y1, y2, ...]``.
+    """
+    out = []
+    for k in range(0, len(y), 2):
+        g = 1.0 + y[k] * y[k]
+        out.append(g * image_sigma_rad)
+        out.append(math.sqrt(g) * image_sigma_rad)
+    return out
+
+
 # --------------------------------------------------------------------------- parameters
 @dataclass(frozen=True)
 class PointsParams(ObserverParams):
@@ -214,7 +229,27 @@ class _SecondOrderParams(PointsParams):
 
 @dataclass(frozen=True)
 class CCCSParams(_SecondOrderParams):
-    """Output combination observer (thesis 4.3.1.2)."""
+    """Output combination observer (thesis 4.3.1.2).
+
+    Robustness to image noise (issue 12; both 0 by default, the thesis's observer):
+
+    noise_sigma_rad : image noise as an angle (1 px of the SPEC camera = 1/2472 rad). ``y_a`` is
+        quadratic in the corners, so noise of variance ``s_i^2`` on each virtual coordinate
+        (:func:`virtual_noise_sigma`) biases the measured ``y_a`` by ``-v3/2 sum s_i^2``; with 5 px
+        5 km out that is as large as the signal ``Delta_y eta``, and the bias is added back to
+        the innovation.
+    max_eta_rate : 1/s, bound on the relative rate of the eta correction ``|eta_hat'| / eta_hat``
+        (a saturation of the correction term of 4.66: its ``1 / Delta_y`` is large where the
+        observability index dips, and with 5 px one noisy frame there threw eta to its bound).
+    """
+
+    max_eta_rate: float = 0.0
+    noise_sigma_rad: float = 0.0
+
+    def __post_init__(self):
+        super().__post_init__()
+        self._check_range("max_eta_rate", 0.0, 1e6)
+        self._check_range("noise_sigma_rad", 0.0, 0.1)
 
 
 @dataclass(frozen=True)
@@ -272,6 +307,9 @@ class _PointsObserver(Observer):
     #: integrate the correction in sub-steps at slow frame rates (False for a filter whose
     #: correction is one update per measurement: kf-2p)
     substep_correction = True
+    #: project the state's eta onto [ETA_MIN, ETA_MAX] after every step (True), or only the
+    #: reported height (False: ii-2p, see its docstring)
+    project_state = True
 
     def _reset(self, first: ObserverInput, dh0_m: float, measurement: np.ndarray) -> None:
         self._y = [float(measurement[0, 0]), float(measurement[0, 1]), float(measurement[1, 0]),
@@ -309,8 +347,9 @@ class _PointsObserver(Observer):
             for _ in range(n):
                 self._correct(measurement, dt_c / n, v_new)
             self._t_corrected = float(inp.t_s)
-        self._eta = clip_eta(self._eta)
-        return Estimate(t_s=float(inp.t_s), dh_m=1.0 / self._eta,
+        if self.project_state:
+            self._eta = clip_eta(self._eta)
+        return Estimate(t_s=float(inp.t_s), dh_m=1.0 / clip_eta(self._eta),
                         observability=points_observability(self._y, v_new),
                         coasting=measurement is None, state=self._get_state())
 
@@ -389,10 +428,18 @@ class II2P(_PointsObserver):
     ``beta'`` make ``eta_hat' = v3 eta_hat^2`` exactly; at a frame ``y_hat`` jumps to the
     measurement and ``beta`` with it: ``eta_hat += -lambda (y_a(y) - y_a(y_hat))``. State:
     ``[y'1, y'2, y''1, y''2, eta_hat]`` (``eta_bar = eta_hat + lambda y_a(y_hat)``).
+
+    The state's eta is not projected onto ``[ETA_MIN, ETA_MAX]`` (only the reported height is):
+    a frame's image noise enters ``beta`` and leaves it at the next frame with the opposite sign,
+    so eta_hat is the true value plus a noise that does not accumulate; with 5 px far out that
+    noise exceeds eta itself, and projecting the negative excursions onto ``ETA_MIN`` kept the
+    upward half only, a drift that took ii-2p to the 0.5 m bound (thesis-1 and -2 of
+    ``visland study table-5.7``). Unprojected, the jumps cancel as 4.6-4.7 intend.
     """
 
     name = "ii-2p"
     params_type = IIParams
+    project_state = False
 
     def _correct(self, measurement, dt_c, v) -> None:
         y_meas = _flat(measurement)
@@ -414,6 +461,8 @@ class CCCS2P(_PointsObserver):
     ``chi`` needs the points between frames: they are predicted with the model and reset to
     each measurement; ``y_a_hat`` is carried as ``y_a(y_hat) + delta`` whose offset obeys
     ``delta' = 2 v3 eta delta`` exactly. State: ``[y'1, y'2, y''1, y''2, eta, y_a_hat]``.
+    With image noise: the bias correction of ``y_a`` and the saturation of the eta correction of
+    :class:`CCCSParams` (both off by default).
     """
 
     name = "cccs-2p"
@@ -432,11 +481,20 @@ class CCCS2P(_PointsObserver):
         y_meas = _flat(measurement)
         ya_hat = output_combination(self._y, v) + self._delta
         e = output_combination(y_meas, v) - ya_hat
+        sigma = self.params.noise_sigma_rad
+        if sigma > 0.0:
+            # y_a is quadratic in y: image noise of variance s_i^2 on each coordinate biases it by
+            # -v3/2 sum s_i^2 (5 px, 5 km out: as large as the signal Delta_y eta); removed here
+            e += 0.5 * v[2] * sum(si * si for si in virtual_noise_sigma(self._y, sigma))
         # Delta_y = -O (4.56-4.58 corrected) at the predicted points: always negative, whereas
         # 2 v3 y_a_hat - 2 (v1^2 + v2^2) can change sign while y_a_hat is still wrong
         delta_y = -max(points_observability(self._y, v), 1e-9)
         k1, k2 = self._k1, self._k2
-        self._eta += dt_c * (k2 * e - 2.0 * v[2] * self._eta * k1 * e) / delta_y
+        deta = dt_c * (k2 * e - 2.0 * v[2] * self._eta * k1 * e) / delta_y
+        cap = self.params.max_eta_rate * dt_c * self._eta
+        if cap > 0.0 and abs(deta) > cap:
+            deta = math.copysign(cap, deta)
+        self._eta += deta
         ya_new = ya_hat + dt_c * k1 * e
         self._y = y_meas
         self._delta = ya_new - output_combination(y_meas, v)
