@@ -124,6 +124,8 @@ def register(subparsers):
         The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
         command added sets ``func``, called with the parsed arguments, returning the exit status.
     """
+    from visland.cli import add_frame_source_arguments
+    from visland.estimation.cli import add_initial_guess_arguments
     p = subparsers.add_parser(
         "fly", help="closed loop: the autopilot flies on the vision estimates, flares and lands (one JSON line)",
         description="Fly a scenario with the ILS laws fed by an observer's estimates (dY, dGS, dpsi) instead of the "
@@ -165,10 +167,7 @@ def register(subparsers):
                    help="frame folder (frames/, telemetry.csv, camera.json, ...) or video file; several make a batch: "
                         "one run per input under --out, index.html linking them, and the compare tables")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (refused if it exists, unless --force)")
-    p.add_argument("--telemetry", metavar="FILE", help="telemetry.csv (default: INPUT/telemetry.csv or beside the video)")
-    p.add_argument("--camera", metavar="FILE", help="camera.json (default: INPUT/camera.json or beside the video)")
-    p.add_argument("--frames-csv", metavar="FILE", help="frame,t_s times (default: INPUT/frames.csv; else --fps)")
-    p.add_argument("--fps", type=float, default=None, help="frame rate when there is no frames.csv (default 25, or the video's)")
+    add_frame_source_arguments(p)
     p.add_argument("--source", default="detection", metavar="SOURCE",
                    help="how features are measured: detection (default), tracking, anchored (tracking re-anchored on "
                         "detection) or ideal (the folder's exact labels); tracking and anchored may name a template "
@@ -176,13 +175,8 @@ def register(subparsers):
     p.add_argument("--observer", nargs="+", metavar="NAME", help=OBSERVER_HELP)
     p.add_argument("--init", metavar="labels|'u,v;u,v'", default=None,
                    help="tracking designation of the threshold corners (default: labels when present)")
-    p.add_argument("--initial-height", type=float, default=None, metavar="M",
-                   help="initial height guess (required without truth.csv)")
-    p.add_argument("--initial-error", type=float, default=0.2, metavar="FRACTION",
-                   help="with truth and no --initial-height: start this fraction above the truth (default 0.2)")
+    add_initial_guess_arguments(p)
     p.add_argument("--params", default=None, metavar="FILE", help="observer parameters (TOML or JSON)")
-    p.add_argument("--time-offset", type=float, default=0.0, metavar="S",
-                   help="seconds added to the telemetry's times to put them on the frames' clock (default 0)")
     p.add_argument("--estimate-offset", action="store_true",
                    help="estimate the telemetry-to-frames clock offset from the horizon's roll in the frames")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")

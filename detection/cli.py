@@ -26,7 +26,7 @@ def _cmd_detect(args) -> int:
         raise ValueError(f"{out}: is a folder; --out names the measurements CSV file to write")
     params = _load_params(args.params)
     folder = FrameFolder(args.dir, camera=args.camera, telemetry=args.telemetry, frames_csv=args.frames_csv,
-                         fps=args.fps, require_telemetry=False)
+                         fps=args.fps, require_telemetry=False, time_offset_s=args.time_offset)
     from visland.limits import check_frame_folder
     check_frame_folder(folder, args.camera or str(Path(args.dir) / "camera.json"), args.dir)
     if folder.inertial is None:
@@ -66,6 +66,7 @@ def register(subparsers):
         The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
         command added sets ``func``, called with the parsed arguments, returning the exit status.
     """
+    from visland.cli import add_frame_source_arguments
     p = subparsers.add_parser(
         "detect", help="detect the runway in a frame folder; write measurements.csv",
         description="Detect the runway (edges, centre line, threshold and far corners, d_F and the heading "
@@ -77,11 +78,7 @@ def register(subparsers):
     p.add_argument("dir", metavar="DIR", help="frame folder (frames/, telemetry.csv, camera.json, ...)")
     p.add_argument("--out", required=True, metavar="FILE", help="measurements CSV to write (refused if it exists)")
     p.add_argument("--params", metavar="FILE", help="detector parameters, JSON or TOML (visland.detection.DetectorParams)")
-    p.add_argument("--camera", metavar="FILE", help="camera.json (default DIR/camera.json)")
-    p.add_argument("--telemetry", metavar="FILE", help="telemetry.csv (default DIR/telemetry.csv; without one, roll "
-                                                       "and pitch are read off each frame)")
-    p.add_argument("--frames-csv", metavar="FILE", help="frame,t_s times (default DIR/frames.csv, else --fps)")
-    p.add_argument("--fps", type=float, default=None, help="frame rate when there is no frames.csv (default 25)")
+    add_frame_source_arguments(p, telemetry_note="without one, roll and pitch are read off each frame")
     p.add_argument("--max-frames", type=int, default=None, metavar="N", help="only the first N frames")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.add_argument("--force", action="store_true", help="replace an existing output file")

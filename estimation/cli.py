@@ -63,6 +63,24 @@ def _cmd_bench_estimate(args) -> int:
     return 0
 
 
+def add_initial_guess_arguments(parser) -> None:
+    """The observers' initial guess, declared once for ``estimate`` and ``process``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The subcommand's parser: gains ``--initial-height`` (attribute ``initial_height``, metres
+        above the runway, None by default) and ``--initial-error`` (``initial_error``, a
+        fraction, 0.2 by default), checked by the command with
+        :func:`visland.estimation.command.check_initial_guess`.
+    """
+    parser.add_argument("--initial-height", type=float, default=None, metavar="M",
+                        help="initial guess of the height above the runway (required without truth.csv)")
+    parser.add_argument("--initial-error", type=float, default=0.2, metavar="FRACTION",
+                        help="with truth.csv and no --initial-height: start this fraction above the true height "
+                             "(default 0.2, the seeds' 20 %%)")
+
+
 def register(subparsers):
     """Add this stage's commands to the visland parser.
 
@@ -83,11 +101,7 @@ def register(subparsers):
                    help="a measurements.csv, or 'ideal' for the folder's exact labels.csv")
     p.add_argument("--observer", required=True, nargs="+", metavar="NAME", help=OBSERVER_HELP)
     p.add_argument("--out", required=True, metavar="FILE", help="estimates.csv to write")
-    p.add_argument("--initial-height", type=float, default=None, metavar="M",
-                   help="initial guess of the height above the runway (required without truth.csv)")
-    p.add_argument("--initial-error", type=float, default=0.2, metavar="FRACTION",
-                   help="with truth.csv and no --initial-height: start this fraction above the true height "
-                        "(default 0.2, the seeds' 20 %%)")
+    add_initial_guess_arguments(p)
     p.add_argument("--aim-distance", type=float, default=320.0, metavar="M",
                    help="aiming point distance past the threshold, for dX (default 320 m)")
     p.add_argument("--params", default=None, metavar="FILE",

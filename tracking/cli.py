@@ -18,6 +18,7 @@ def register(subparsers):
         The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
         command added sets ``func``, called with the parsed arguments, returning the exit status.
     """
+    from visland.cli import add_frame_source_arguments
     p = subparsers.add_parser(
         "track", help="track designated points (runway corners) through a frame folder into measurements.csv",
         description="Template tracking of designated points (thesis 5.3.2.1) through the frames of DIR "
@@ -48,9 +49,7 @@ def register(subparsers):
                    help="with --init labels: also track K points on each side edge (for the rigid check)")
     p.add_argument("--no-inertial", action="store_true",
                    help="ignore the telemetry attitude (no rotation prediction, template warp or rigid check)")
-    p.add_argument("--camera", metavar="FILE", help="camera.json to use instead of DIR/camera.json")
-    p.add_argument("--telemetry", metavar="FILE", help="telemetry.csv to use instead of DIR/telemetry.csv")
-    p.add_argument("--fps", type=float, default=None, help="frame rate when DIR has no frames.csv (default 25)")
+    add_frame_source_arguments(p, telemetry_note="required unless --no-inertial")
     p.add_argument("--force", action="store_true", help="replace an existing output file")
     p.set_defaults(func=_cmd_track)
 
@@ -100,8 +99,8 @@ def _cmd_track(args) -> int:
     params = TrackerParams.load(args.params) if args.params else TrackerParams()
     if args.policy:
         params = TrackerParams.from_dict({**params.to_dict(), "update_policy": args.policy}, source="--policy")
-    folder = FrameFolder(args.folder, camera=args.camera, telemetry=args.telemetry, fps=args.fps,
-                         require_telemetry=not args.no_inertial)
+    folder = FrameFolder(args.folder, camera=args.camera, telemetry=args.telemetry, frames_csv=args.frames_csv,
+                         fps=args.fps, require_telemetry=not args.no_inertial, time_offset_s=args.time_offset)
     from visland.limits import check_frame_folder
     check_frame_folder(folder, args.camera or str(Path(args.folder) / "camera.json"), args.folder)
     run = track_source(folder, init=args.init, params=params, anchor=args.anchor, anchor_every=args.anchor_every,

@@ -83,6 +83,33 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="replace an existing output folder")
 
 
+def add_frame_source_arguments(parser: argparse.ArgumentParser, telemetry_note: str = "") -> None:
+    """Where a recording's files are when not in its folder: the options of ``detect``, ``track``
+    and ``process``, declared once here so that they read and behave alike.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The subcommand's parser: gains ``--camera``, ``--telemetry``, ``--frames-csv``, ``--fps``
+        and ``--time-offset`` (attributes ``camera``, ``telemetry``, ``frames_csv``, ``fps``,
+        ``time_offset``), passed on to :class:`visland.folder.FrameFolder` or
+        :func:`visland.datasets.sources.open_source`.
+    telemetry_note : str, optional
+        What the command does without telemetry, appended to ``--telemetry``'s help.
+    """
+    parser.add_argument("--camera", metavar="FILE",
+                        help="camera.json to use instead of the input's own (in its folder, or beside a video)")
+    parser.add_argument("--telemetry", metavar="FILE",
+                        help="telemetry.csv to use instead of the input's own (in its folder, or beside a video)"
+                             + (f"; {telemetry_note}" if telemetry_note else ""))
+    parser.add_argument("--frames-csv", metavar="FILE",
+                        help="frame,t_s times to use instead of the folder's frames.csv (without either: --fps)")
+    parser.add_argument("--fps", type=float, default=None,
+                        help="frame rate in Hz when there is no frames.csv (default 25, or the video's own)")
+    parser.add_argument("--time-offset", type=float, default=0.0, metavar="S",
+                        help="seconds added to the telemetry's times to put them on the frames' clock (default 0)")
+
+
 def scenario_from_args(args):
     """The scenario of ``--scenario`` with the runway options (``--slope``) applied.
 

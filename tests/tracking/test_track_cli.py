@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from visland.cli import main
-from visland.contracts import LABEL_COLUMNS, MEASUREMENT_COLUMNS, TELEMETRY_COLUMNS, read_measurements, write_csv
+from visland.contracts import (LABEL_COLUMNS, MEASUREMENT_COLUMNS, TELEMETRY_COLUMNS, read_frames_csv,
+                               read_measurements, write_csv)
 from visland.runway import CORNER_NAMES
 
 
@@ -104,6 +105,20 @@ def test_bad_arguments_fail_with_one_clear_line(folder, tmp_path, capsys):
     assert code == 2 and "input folder not found" in err
     code, _, err = run(["track", str(folder), "--out", str(tmp_path / "n.csv"), "--start", "99"], capsys)
     assert code == 2 and "--start must be a frame index" in err
+
+
+def test_frames_csv_option_replaces_the_folders_frame_times(folder, tmp_path, capsys):
+    times = np.asarray(read_frames_csv(folder / "frames.csv")["t_s"])
+    short = tmp_path / "short.csv"          # one frame listed for the folder's several: refused, naming this file
+    write_csv(short, {"frame": [0], "t_s": times[:1]})
+    code, _, err = run(["track", str(folder), "--out", str(tmp_path / "n.csv"), "--frames-csv", str(short)], capsys)
+    assert code == 2 and f"{short}: lists 1 frames" in err
+    copy = tmp_path / "copy.csv"
+    write_csv(copy, {"frame": list(range(len(times))), "t_s": times})
+    out = tmp_path / "m.csv"
+    code, stdout, _ = run(["track", str(folder), "--out", str(out), "--frames-csv", str(copy)], capsys)
+    assert code == 0, stdout
+    np.testing.assert_array_equal(read_measurements(out)["t_s"], times)
 
 
 def test_params_file_and_policy_option(folder, tmp_path, capsys):
