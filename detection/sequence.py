@@ -89,21 +89,26 @@ class DetectionSequence:
         self.identity = None
         self.recent = []
 
-    def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float) -> DetectionResult:
+    def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float,
+                 predicted: DetectionResult | None = None) -> DetectionResult:
         """Detect the runway in the frame at ``t_s`` (seconds, increasing).
 
         ``roll_rad``, ``pitch_rad``: the inertial attitude at the frame's time, or both None to
-        read the horizon off the frame (module docstring).
+        read the horizon off the frame (module docstring). ``predicted``: where something else
+        (an estimator, :func:`visland.detection.predicted.prior_from_prediction`) expects the runway
+        in this frame; when it is a found result the search window is placed by it instead of by the
+        last good detection. The checks over time still compare with the last good detection.
         """
         prior = self.last_good
         dt = math.inf if self.t_good_s is None else float(t_s) - self.t_good_s
         if prior is not None and not 0.0 < dt <= self.params.hold_s:
             prior = None
+        window = predicted if predicted is not None and predicted.found else prior
         if roll_rad is None or pitch_rad is None:
-            result = self._detect_without_attitude(image, prior)
+            result = self._detect_without_attitude(image, window)
             roll_rad, pitch_rad = result.roll_rad, result.pitch_rad
         else:
-            result = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params, previous=prior)
+            result = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params, previous=window)
         if result.found and prior is not None and result.mode != "tracking":
             why = self._inconsistency(result, prior, dt)
             if why:

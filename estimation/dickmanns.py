@@ -796,7 +796,10 @@ class Dickmanns4D(Observer):
 
         The mean is carried to ``inp.t_s`` by the model (inertial rates of ``inp``). Returns
         ``{"left", "right", "threshold", "horizon": (rho, theta) in the SPEC chart, "near_xy": (2, 2)
-        normalised threshold corners P', P'' (NaN behind the camera)}``.
+        normalised threshold corners P', P'' (NaN behind the camera), "far_xy": (2, 2) the points
+        ``noise_edge_length_m`` further along the left and right edges, "dpsi_rad": the heading
+        deviation corrected by the filter}``: what :func:`visland.detection.predicted.prior_from_prediction`
+        turns into the detector's search window (seed 004's prediction-placed windows).
         """
         from visland.camera import wrap_line_chart
         if self._t_s is None:
@@ -817,8 +820,13 @@ class Dickmanns4D(Observer):
             out[name] = (float(rho), float(theta))
         A = rotation_correction(x[_AX], x[_AY], x[_AZ])
         R_cr = (A @ inp.R_runway_from_camera).T
-        near = np.array([[-x[_XI], -0.5 * x[_OMEGA] - x[_ZETA], 1.0],
-                         [-x[_XI], 0.5 * x[_OMEGA] - x[_ZETA], 1.0]]) @ R_cr.T
+        far_x = self.params.noise_edge_length_m * x[_ETA] - x[_XI]
+        ends = np.array([[-x[_XI], -0.5 * x[_OMEGA] - x[_ZETA], 1.0],
+                         [-x[_XI], 0.5 * x[_OMEGA] - x[_ZETA], 1.0],
+                         [far_x, -0.5 * x[_OMEGA] - x[_ZETA], 1.0],
+                         [far_x, 0.5 * x[_OMEGA] - x[_ZETA], 1.0]]) @ R_cr.T
         with np.errstate(divide="ignore", invalid="ignore"):
-            out["near_xy"] = np.where(near[:, 2:3] > 1e-9, near[:, :2] / near[:, 2:3], np.nan)
+            xy = np.where(ends[:, 2:3] > 1e-9, ends[:, :2] / ends[:, 2:3], np.nan)
+        out["near_xy"], out["far_xy"] = xy[:2], xy[2:]
+        out["dpsi_rad"] = float(inp.dpsi_rad) + float(x[_AZ])
         return out

@@ -399,3 +399,27 @@ def test_predicted_lines_for_the_detector_match_the_next_frame():
     for k, name in enumerate(("left", "right")):
         rho, theta = predicted[name]
         assert abs(theta - measured[k, 1]) < 1e-4 and abs(rho - measured[k, 0]) < 1e-4
+
+
+def test_predicted_window_points_for_the_detector():
+    """near_xy: the next frame's threshold corners (their measured virtual coordinates turned into the
+    camera, thesis 3.23); far_xy: points on the predicted edges, further along the runway."""
+    result = simulation("thesis-1")
+    prep = prepared("thesis-1")
+    observer = make_observer("dickmanns-4d")
+    start = prep.first_step_with("lines")
+    dh = -result.frames.p_runway_m[:, 2]
+    observer.reset(prep.steps[start], dh[prep.frame_of_step[start]])
+    for j in range(start + 1, start + 600):
+        observer.step(prep.steps[j])
+    nxt = next(j for j in range(start + 600, len(prep.steps)) if prep.frame_of_step[j] >= 0)
+    inp = prep.steps[nxt]
+    predicted = observer.predicted_lines(inp)
+    rays = np.column_stack([inp.points_yv, np.ones(2)]) @ inp.R_runway_from_camera     # R^T ray, row-wise
+    np.testing.assert_allclose(predicted["near_xy"], rays[:, :2] / rays[:, 2:3], atol=2e-5)
+    for k, name in enumerate(("left", "right")):
+        rho, theta = predicted[name]
+        x, y = predicted["far_xy"][k]
+        assert abs(x * math.cos(theta) + y * math.sin(theta) - rho) < 1e-9
+        assert y < predicted["near_xy"][k, 1]                   # further away: higher in the image
+    assert abs(predicted["dpsi_rad"] - result.frames.dpsi_rad[prep.frame_of_step[nxt]]) < math.radians(0.05)
