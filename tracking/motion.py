@@ -58,17 +58,59 @@ class Attitude:
 
 
 def R_camera_from_level(attitude: Attitude, heading_reference_rad: float, camera: CameraModel) -> np.ndarray:
-    """Rotation from the level frame L (x along ``heading_reference_rad``, z down) to the camera frame."""
+    """Rotation from the level frame L (x along ``heading_reference_rad``, z down) to the camera frame.
+
+    Parameters
+    ----------
+    attitude : Attitude
+        The body's roll, pitch and true heading relative to NED, radians.
+    heading_reference_rad : float
+        Heading of L's x axis, radians (the heading at the designation frame).
+    camera : visland.camera.CameraModel
+        Its mounting (body to camera, ``mount_rpy_rad``).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``R_C_from_L``: L coordinates to OpenCV camera coordinates (x right, y down, z forward).
+    """
     return R_camera_from_runway(attitude.roll_rad, attitude.pitch_rad,
                                 attitude.heading_rad - heading_reference_rad, camera.mount_rpy_rad)
 
 
 def rotation_homography(R_cb_from_ca: np.ndarray, camera: CameraModel) -> np.ndarray:
-    """Pixel homography ``K R K^-1`` of a pure camera rotation from frame a to frame b."""
+    """Pixel homography ``K R K^-1`` of a pure camera rotation from frame a to frame b.
+
+    Parameters
+    ----------
+    R_cb_from_ca : ndarray, shape (3, 3)
+        Rotation from camera frame a (before) to camera frame b (after).
+    camera : visland.camera.CameraModel
+        Its intrinsic matrix ``K`` (pixels).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Maps homogeneous pixels ``(u, v, 1)`` of frame a to those of frame b (SPEC pixel
+        convention: (0, 0) at the centre of the top-left pixel, u right, v down).
+    """
     K = camera.K
     return K @ R_cb_from_ca @ np.linalg.inv(K)
 
 
-def virtual_to_pixel_homography(R_camera_from_level_: np.ndarray, camera: CameraModel) -> np.ndarray:
-    """``G = K R_C_from_L``: virtual ground coordinates ``(y_v1, y_v2)`` (thesis 3.23) to pixels."""
-    return camera.K @ R_camera_from_level_
+def virtual_to_pixel_homography(R_cam_from_level: np.ndarray, camera: CameraModel) -> np.ndarray:
+    """``G = K R_C_from_L``: virtual ground coordinates ``(y_v1, y_v2)`` (thesis 3.23) to pixels.
+
+    Parameters
+    ----------
+    R_cam_from_level : ndarray, shape (3, 3)
+        Rotation from the level frame L to the camera frame (:func:`R_camera_from_level`).
+    camera : visland.camera.CameraModel
+        Its intrinsic matrix ``K`` (pixels).
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Maps homogeneous virtual coordinates ``(y_v1, y_v2, 1)`` to homogeneous pixels.
+    """
+    return camera.K @ R_cam_from_level

@@ -157,7 +157,7 @@ class _Point:
     cut_R_camera_from_level: np.ndarray | None = None
     cut_motion: PlaneMotion | None = None
     cut_configuration: dict = field(default_factory=dict)
-    q: np.ndarray | None = None
+    q_designation: np.ndarray | None = None    # designation coordinates (tracking.rigid), once known
     score: float = math.nan
     residual_px: float = math.nan
     coast_count: int = 0
@@ -199,7 +199,7 @@ class PointTracker:
         self._frame = -1
         self._started = False
         self._heading_reference = None
-        self._R_prev = None
+        self._R_cam_from_level_before = None
         self._motions: list[tuple[int, PlaneMotion]] = []
         self._configuration: dict = {}
         self._reference_half = int(math.ceil(1.5 * params.half_template_px)) + 1
@@ -242,14 +242,15 @@ class PointTracker:
         self._frame = int(frame_index)
         self._points = []
         self._motions = []
-        R_now = None
+        R_cam_from_level = None
         if attitude is not None:
             self._heading_reference = float(attitude.heading_rad)
-            R_now = R_camera_from_level(attitude, self._heading_reference, self.camera)
+            R_cam_from_level = R_camera_from_level(attitude, self._heading_reference, self.camera)
         else:
             self._heading_reference = None
-        self._R_prev = R_now
-        G_now = virtual_to_pixel_homography(R_now, self.camera) if R_now is not None else None
+        self._R_cam_from_level_before = R_cam_from_level
+        G_virtual_to_pixels = (virtual_to_pixel_homography(R_cam_from_level, self.camera)
+                               if R_cam_from_level is not None else None)
         for name, uv in items:
             point = self._designate(image, str(name), uv)
             self._points.append(point)
@@ -257,14 +258,14 @@ class PointTracker:
         if not usable:
             raise ValueError("no designated point can be tracked: "
                              + "; ".join(f"{p.name}: {p.reason}" for p in self._points))
-        if G_now is not None:
-            G_inv = np.linalg.inv(G_now)
+        if G_virtual_to_pixels is not None:
+            G_pixels_to_virtual = np.linalg.inv(G_virtual_to_pixels)
             for p in usable:
-                p.q = apply_homography(G_inv, p.uv)
+                p.q_designation = apply_homography(G_pixels_to_virtual, p.uv)
             self._motions.append((self._frame, PlaneMotion(1.0, np.zeros(2))))
         self._configuration = {p.name: p.uv.copy() for p in usable}
         for p in usable:
-            p.cut_R_camera_from_level = R_now
+            p.cut_R_camera_from_level = R_cam_from_level
             p.cut_motion = self._motions[-1][1] if self._motions else None
             p.cut_configuration = dict(self._configuration)
         self._started = True
@@ -302,38 +303,40 @@ class PointTracker:
         gap = index - self._frame
         self._frame = index
         params = self.params
-        R_now = None
+        R_cam_from_level = None
         if attitude is not None and self._heading_reference is not None:
-            R_now = R_camera_from_level(attitude, self._heading_reference, self.camera)
-        G_now = virtual_to_pixel_homography(R_now, self.camera) if R_now is not None else None
-        H_rotation = None
-        if R_now is not None and self._R_prev is not None and params.use_inertial_prediction:
-            H_rotation = rotation_homography(R_now @ self._R_prev.T, self.camera)
-        motion_guess = self._smoothed_motion(index) if G_now is not None else None
+            R_cam_from_level = R_camera_from_level(attitude, self._heading_reference, self.camera)
+        G_virtual_to_pixels = (virtual_to_pixel_homography(R_cam_from_level, self.camera)
+                               if R_cam_from_level is not None else None)
+        H_now_from_before = None
+        if (R_cam_from_level is not None and self._R_cam_from_level_before is not None
+                and params.use_inertial_prediction):
+            H_now_from_before = rotation_homography(R_cam_from_level @ self._R_cam_from_level_before.T, self.camera)
+        motion_guess = self._smoothed_motion(index) if G_virtual_to_pixels is not None else None
 
         bases = {}
         for p in self._points:
             p.residual_px = math.nan
             if not p.active:
                 continue
-            base = apply_homography(H_rotation, p.uv) if H_rotation is not None else p.uv.copy()
+            base = apply_homography(H_now_from_before, p.uv) if H_now_from_before is not None else p.uv.copy()
             bases[p.name] = base
-            self._match(p, image, base + gap * p.velocity, motion_guess, G_now, R_now)
+            self._match(p, image, base + gap * p.velocity, motion_guess, G_virtual_to_pixels, R_cam_from_level)
 
         notes = []
         motion, checked, fit = None, False, None
-        if G_now is not None:
-            motion, checked, consistency_note, fit = self._check_rigid(G_now)
+        if G_virtual_to_pixels is not None:
+            motion, checked, consistency_note, fit = self._check_rigid(G_virtual_to_pixels)
             notes.append(consistency_note)
         if anchor is not None:
-            notes.append(self._apply_anchor(anchor, index, motion, G_now))
+            notes.append(self._apply_anchor(anchor, index, motion, G_virtual_to_pixels))
         note = "; ".join(x for x in notes if x)
         if motion is not None and (fit.decided or not fit.checked):
             self._motions = (self._motions + [(index, motion)])[-MOTION_HISTORY:]
             for p in self._points:
-                if p.q is None and p.status in MEASURED_STATUSES:
-                    p.q = motion.designation(apply_homography(np.linalg.inv(G_now), p.uv))
-            self._follow_rigid_motion(image, motion, fit, G_now, R_now)
+                if p.q_designation is None and p.status in MEASURED_STATUSES:
+                    p.q_designation = motion.designation(apply_homography(np.linalg.inv(G_virtual_to_pixels), p.uv))
+            self._follow_rigid_motion(image, motion, fit, G_virtual_to_pixels, R_cam_from_level)
 
         configuration = {p.name: p.uv.copy() for p in self._points if p.status in MEASURED_STATUSES}
         for p in self._points:
@@ -342,9 +345,10 @@ class PointTracker:
         smoothed = self._smoothed_motion(index) if motion is not None else None
         for p in self._points:
             if p.status in MEASURED_STATUSES:
-                self._maybe_update_template(p, image, index, R_now, smoothed, configuration, G_now)
+                self._maybe_update_template(p, image, index, R_cam_from_level, smoothed, configuration,
+                                            G_virtual_to_pixels)
         self._configuration = configuration
-        self._R_prev = R_now
+        self._R_cam_from_level_before = R_cam_from_level
         return self._report(motion, checked, anchor, note)
 
     # ----------------------------------------------------------------- designation
@@ -382,7 +386,8 @@ class PointTracker:
         return patch_texture(central, self.params.min_texture, self.params.min_contrast)
 
     # ----------------------------------------------------------------- matching
-    def _warp_reference_from_image(self, p: _Point, predicted, motion_guess, G_now, R_now, configuration=None):
+    def _warp_reference_from_image(self, p: _Point, predicted, motion_guess, G_virtual_to_pixels, R_cam_from_level,
+                                   configuration=None):
         """2x2 map of displacements now -> in the reference image, or None if unknown.
 
         With the inertial attitude: the local derivative of the ground-plane homography from
@@ -391,7 +396,7 @@ class PointTracker:
         point configuration between the cut and now (``configuration``, default the last
         frame's), when at least two points are common to both.
         """
-        if R_now is None or p.cut_R_camera_from_level is None:
+        if R_cam_from_level is None or p.cut_R_camera_from_level is None:
             similarity = _similarity(p.cut_configuration,
                                      self._configuration if configuration is None else configuration)
             if similarity is None:
@@ -405,15 +410,15 @@ class PointTracker:
                               [0, p.cut_motion.scale, p.cut_motion.shift[1]], [0, 0, 1.0]])
             S_now_inv = np.array([[1.0, 0, -motion_guess.shift[0]], [0, 1.0, -motion_guess.shift[1]],
                                   [0, 0, motion_guess.scale]]) / motion_guess.scale
-            H_cut_from_now = G_cut @ S_cut @ S_now_inv @ np.linalg.inv(G_now)
+            H_cut_from_now = G_cut @ S_cut @ S_now_inv @ np.linalg.inv(G_virtual_to_pixels)
         else:
-            H_cut_from_now = rotation_homography(p.cut_R_camera_from_level @ R_now.T, self.camera)
+            H_cut_from_now = rotation_homography(p.cut_R_camera_from_level @ R_cam_from_level.T, self.camera)
         A = homography_jacobian(H_cut_from_now, predicted)
         if not np.all(np.isfinite(A)) or abs(np.linalg.det(A)) < 1e-6:
             return None
         return A
 
-    def _match(self, p: _Point, image, predicted, motion_guess, G_now, R_now) -> None:
+    def _match(self, p: _Point, image, predicted, motion_guess, G_virtual_to_pixels, R_cam_from_level) -> None:
         params = self.params
         half = params.half_template_px
         margin = half - params.border_margin_px
@@ -425,7 +430,7 @@ class PointTracker:
         if p.reference is None:
             self._lose(p, "no template (the last cut was featureless or at the border)")
             return
-        A = self._warp_reference_from_image(p, predicted, motion_guess, G_now, R_now)
+        A = self._warp_reference_from_image(p, predicted, motion_guess, G_virtual_to_pixels, R_cam_from_level)
         template, offset = template_from_reference(p.reference, params.template_size_px,
                                                    A if params.scale_adaptation else None)
         match = match_in_window(image, template, offset, predicted, params.search_radius_px, params.min_score,
@@ -454,7 +459,7 @@ class PointTracker:
         """Largest standard deviation of a rigid prediction that the tracker acts on."""
         return self.params.consistency_threshold_px / 2.0
 
-    def _follow_rigid_motion(self, image, motion, fit, G_now, R_now) -> None:
+    def _follow_rigid_motion(self, image, motion, fit, G_virtual_to_pixels, R_cam_from_level) -> None:
         """Put coasting points where the rigid motion puts them, and look for lost ones there.
 
         Only where the motion places the point precisely (standard deviation under half the
@@ -465,12 +470,13 @@ class PointTracker:
             return
         params = self.params
         for p in self._points:
-            if p.q is None or p.status not in ("coasting", "lost"):
+            if p.q_designation is None or p.status not in ("coasting", "lost"):
                 continue
-            std = float(prediction_std_px(motion, fit.information, p.q, G_now, params.consistency_sigma_px)[0])
+            std = float(prediction_std_px(motion, fit.information, p.q_designation, G_virtual_to_pixels,
+                                          params.consistency_sigma_px)[0])
             if not std <= self._reliable_limit_px():
                 continue
-            predicted = motion.pixels(p.q, G_now)
+            predicted = motion.pixels(p.q_designation, G_virtual_to_pixels)
             if p.status == "coasting":
                 p.uv = predicted
                 continue
@@ -481,7 +487,7 @@ class PointTracker:
                     and half <= predicted[1] <= self.camera.height - 1 - half):
                 continue
             radius = params.consistency_threshold_px + 3.0 * std
-            A = self._warp_reference_from_image(p, predicted, motion, G_now, R_now)
+            A = self._warp_reference_from_image(p, predicted, motion, G_virtual_to_pixels, R_cam_from_level)
             template, offset = template_from_reference(p.reference, params.template_size_px,
                                                        A if params.scale_adaptation else None)
             match = match_in_window(image, template, offset, predicted, int(math.ceil(radius)) + 1,
@@ -497,7 +503,7 @@ class PointTracker:
                 p.reason = f"re-acquired {distance:.1f} px from where the other points put it"
 
     # ----------------------------------------------------------------- anchoring
-    def _apply_anchor(self, anchor: AnchorObservation, index: int, motion, G_now) -> str:
+    def _apply_anchor(self, anchor: AnchorObservation, index: int, motion, G_virtual_to_pixels) -> str:
         """Re-anchor corners on confident detections (after the rigid check of this frame).
 
         The detection is refused as a whole when a corner of a point tracked consistently
@@ -517,7 +523,7 @@ class PointTracker:
             for p in self._points:
                 p.pending_anchor = []
             return f"anchor: not used (confidence {anchor.confidence:.2f} < {params.anchor_min_confidence:.2f})"
-        G_inv = np.linalg.inv(G_now) if G_now is not None else None
+        G_pixels_to_virtual = np.linalg.inv(G_virtual_to_pixels) if G_virtual_to_pixels is not None else None
         # the detection as a whole must agree with the points tracked consistently: a detector
         # locked onto another object (a taxiway, a road) is refused for every point
         disagreeing = []
@@ -562,9 +568,9 @@ class PointTracker:
                 where = f"{distance:.0f} px from the track" if has_position else f"while {p.status}"
                 self._anchor_point(p, detected, f"re-anchored {where} after {len(p.pending_anchor)} "
                                                "agreeing detections")
-            if motion is not None and G_inv is not None:
+            if motion is not None and G_pixels_to_virtual is not None:
                 # the detector is trusted over the designation: re-base the point's plane position
-                p.q = motion.designation(apply_homography(G_inv, p.uv))
+                p.q_designation = motion.designation(apply_homography(G_pixels_to_virtual, p.uv))
         return ""
 
     def _anchor_point(self, p: _Point, detected, reason: str) -> None:
@@ -576,18 +582,18 @@ class PointTracker:
         p.score = math.nan
 
     # ----------------------------------------------------------------- rigid check
-    def _check_rigid(self, G_now):
+    def _check_rigid(self, G_virtual_to_pixels):
         """Rigid check of the measured points: (motion, checked, note, ConsistencyResult or None)."""
         params = self.params
-        members = [p for p in self._points if p.status in MEASURED_STATUSES and p.q is not None]
+        members = [p for p in self._points if p.status in MEASURED_STATUSES and p.q_designation is not None]
         if len(members) < 2:
             return None, False, "", None
         uv = np.array([p.uv for p in members])
-        q = np.array([p.q for p in members])
+        q = np.array([p.q_designation for p in members])
         normals = [p.edge_normal for p in members]
         threshold = params.consistency_threshold_px + params.consistency_threshold_fraction * \
             self._configuration_size(uv)
-        result = check_consistency(q, uv, G_now, threshold, normals, params.consistency_sigma_px)
+        result = check_consistency(q, uv, G_virtual_to_pixels, threshold, normals, params.consistency_sigma_px)
         if result.motion is None:
             return None, False, "", None
         for k, p in enumerate(members):
@@ -614,7 +620,7 @@ class PointTracker:
                 p.status = "inconsistent"
                 p.reason = text
             elif action == "reproject":
-                p.uv = result.motion.pixels(p.q, G_now)
+                p.uv = result.motion.pixels(p.q_designation, G_virtual_to_pixels)
                 p.status = "reprojected"
                 p.reason = text + "; moved onto it"
             else:
@@ -647,14 +653,15 @@ class PointTracker:
         return PlaneMotion(float(np.exp(at[0])), at[1:].copy())
 
     # ----------------------------------------------------------------- template update
-    def _magnification(self, p: _Point, R_now, motion, G_now, configuration) -> float:
+    def _magnification(self, p: _Point, R_cam_from_level, motion, G_virtual_to_pixels, configuration) -> float:
         """How much the ground around the point has grown in the image since its reference was cut."""
-        A = self._warp_reference_from_image(p, p.uv, motion, G_now, R_now, configuration)
+        A = self._warp_reference_from_image(p, p.uv, motion, G_virtual_to_pixels, R_cam_from_level, configuration)
         if A is None:
             return 1.0
         return 1.0 / math.sqrt(abs(float(np.linalg.det(A))))
 
-    def _maybe_update_template(self, p: _Point, image, index, R_now, motion, configuration, G_now) -> None:
+    def _maybe_update_template(self, p: _Point, image, index, R_cam_from_level, motion, configuration,
+                               G_virtual_to_pixels) -> None:
         params = self.params
         policy = params.update_policy
         if p.status in ("anchored", "reprojected"):
@@ -666,7 +673,7 @@ class PointTracker:
         elif policy == "score_drop":
             cut = math.isfinite(p.score) and p.score < params.update_score_below
         elif policy == "scale_change":
-            magnification = self._magnification(p, R_now, motion, G_now, configuration)
+            magnification = self._magnification(p, R_cam_from_level, motion, G_virtual_to_pixels, configuration)
             cut = max(magnification, 1.0 / magnification) >= params.update_scale_ratio
         else:
             cut = False
@@ -683,7 +690,7 @@ class PointTracker:
         p.reference = reference
         p.texture = texture
         p.cut_frame = index
-        p.cut_R_camera_from_level = R_now
+        p.cut_R_camera_from_level = R_cam_from_level
         p.cut_motion = motion
         p.cut_configuration = dict(configuration)
 

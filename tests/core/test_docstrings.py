@@ -20,7 +20,7 @@ CLI_MODULES = ("visland.cli", "visland.footage_cli", "visland.render.cli", "visl
                "visland.datasets.generate_cli")
 
 #: Modules whose every public function and class documents its parameters.
-DOCUMENTED_MODULES = ("visland.exports", "visland.sensors", "visland.folder", "visland.tracking.run")
+DOCUMENTED_MODULES = ("visland.exports", "visland.sensors", "visland.folder", "visland.tracking.run", "visland.tracking.motion")
 
 
 def _callables(module_names):
