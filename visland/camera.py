@@ -471,6 +471,19 @@ def wrap_line_chart(rho, theta_rad) -> tuple[np.ndarray, np.ndarray]:
 
     A shift of theta by pi flips the sign of rho: ``(rho, theta) ~ (-rho, theta + pi)``,
     so ``theta - k pi`` goes with ``(-1)^k rho``.
+
+    Parameters
+    ----------
+    rho : float or array_like
+        Signed distance of the line from the principal point, normalised coordinates
+        (``x cos(theta) + y sin(theta) = rho``, ``x = (u - cx)/fx``, ``y = (v - cy)/fy``).
+    theta_rad : float or array_like
+        Angle of the line's normal, radians (any value).
+
+    Returns
+    -------
+    rho, theta_rad : ndarray
+        The same line(s) with theta in [-pi/2, pi/2).
     """
     theta = np.asarray(theta_rad, dtype=float)
     rho = np.asarray(rho, dtype=float)
@@ -480,7 +493,18 @@ def wrap_line_chart(rho, theta_rad) -> tuple[np.ndarray, np.ndarray]:
 
 
 def line_through_points(xy_a, xy_b) -> tuple[np.ndarray, np.ndarray]:
-    """SPEC ``(rho, theta)`` of the line through two normalised points ``(..., 2)``."""
+    """SPEC ``(rho, theta)`` of the line through two normalised points.
+
+    Parameters
+    ----------
+    xy_a, xy_b : array_like, shape (..., 2)
+        Two distinct points in normalised coordinates ``x = (u - cx)/fx``, ``y = (v - cy)/fy``.
+
+    Returns
+    -------
+    rho, theta_rad : ndarray, shape (...)
+        ``x cos(theta) + y sin(theta) = rho`` with theta in [-pi/2, pi/2).
+    """
     a = np.asarray(xy_a, dtype=float)
     b = np.asarray(xy_b, dtype=float)
     d = b - a
@@ -491,7 +515,20 @@ def line_through_points(xy_a, xy_b) -> tuple[np.ndarray, np.ndarray]:
 
 
 def intersect_lines(rho_a, theta_a, rho_b, theta_b) -> np.ndarray:
-    """Intersection ``(..., 2)`` of two SPEC lines (NaN where parallel)."""
+    """Intersection of two SPEC lines ``x cos(theta) + y sin(theta) = rho`` (normalised coordinates).
+
+    Parameters
+    ----------
+    rho_a, theta_a : float or array_like
+        First line: distance (normalised) and normal angle (radians).
+    rho_b, theta_b : float or array_like
+        Second line, broadcast against the first.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        ``(x, y)`` normalised coordinates of the intersection, NaN where the lines are parallel.
+    """
     ca, sa = np.cos(theta_a), np.sin(theta_a)
     cb, sb = np.cos(theta_b), np.sin(theta_b)
     det = ca * sb - sa * cb

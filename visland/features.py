@@ -89,12 +89,41 @@ def _batch_rot(axis: int, angle) -> np.ndarray:
 
 
 def batch_R_runway_from_body(roll_rad, pitch_rad, dpsi_rad) -> np.ndarray:
-    """``Rz(dpsi) Ry(pitch) Rx(roll)`` for arrays of angles, shape (..., 3, 3)."""
+    """``Rz(dpsi) Ry(pitch) Rx(roll)`` for arrays of angles.
+
+    Parameters
+    ----------
+    roll_rad, pitch_rad : array_like, shape (...)
+        Body roll and pitch, radians.
+    dpsi_rad : array_like, shape (...)
+        Heading deviation ``psi - psi_rwy`` from the runway axis, radians.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        ``R_runway_from_body``: body coordinates to runway coordinates (R: x along the
+        centreline, y right, z down).
+    """
     return _batch_rot(2, dpsi_rad) @ _batch_rot(1, pitch_rad) @ _batch_rot(0, roll_rad)
 
 
 def batch_R_camera_from_runway(roll_rad, pitch_rad, dpsi_rad, mount_rpy_rad) -> np.ndarray:
-    """``R_camera_from_runway`` for arrays of attitudes relative to the runway."""
+    """``R_camera_from_runway`` for arrays of attitudes relative to the runway.
+
+    Parameters
+    ----------
+    roll_rad, pitch_rad : array_like, shape (...)
+        Body roll and pitch, radians.
+    dpsi_rad : array_like, shape (...)
+        Heading deviation ``psi - psi_rwy`` from the runway axis, radians.
+    mount_rpy_rad : sequence of 3 floats
+        The camera's roll, pitch and yaw relative to the body, radians.
+
+    Returns
+    -------
+    ndarray, shape (..., 3, 3)
+        Runway coordinates to OpenCV camera coordinates (x right, y down, z forward).
+    """
     R_rb = batch_R_runway_from_body(roll_rad, pitch_rad, dpsi_rad)
     R_rc = R_rb @ R_body_from_camera(mount_rpy_rad)
     return np.swapaxes(R_rc, -1, -2)
@@ -104,8 +133,26 @@ def batch_R_camera_from_runway(roll_rad, pitch_rad, dpsi_rad, mount_rpy_rad) -> 
 def project_runway_corners(R_camera_from_runway, p_camera_runway_m, runway: Runway, camera: CameraModel):
     """Pixels of the four corners (:data:`visland.runway.CORNER_NAMES` order).
 
-    Returns ``uv (n, 4, 2)`` (NaN behind the camera), ``in_front (n, 4)`` and ``visible (n, 4)``
-    (in front and inside the image).
+    Parameters
+    ----------
+    R_camera_from_runway : ndarray, shape (n, 3, 3)
+        Runway-to-camera rotation at each frame.
+    p_camera_runway_m : ndarray, shape (n, 3)
+        Camera centre in the runway frame, metres.
+    runway : visland.runway.Runway
+        Its corners (:meth:`Runway.corners_runway_m`).
+    camera : visland.camera.CameraModel
+        Intrinsics (and lens) used to project.
+
+    Returns
+    -------
+    uv : ndarray, shape (n, 4, 2)
+        Pixels (SPEC: (0, 0) at the centre of the top-left pixel, u right, v down), NaN behind
+        the camera.
+    in_front : ndarray of bool, shape (n, 4)
+        In front of the camera.
+    visible : ndarray of bool, shape (n, 4)
+        In front and inside the image.
     """
     corners = runway.corners_runway_m()                                     # (4, 3)
     rel = corners[None, :, :] - np.asarray(p_camera_runway_m)[:, None, :]   # (n, 4, 3) in R axes
@@ -116,7 +163,23 @@ def project_runway_corners(R_camera_from_runway, p_camera_runway_m, runway: Runw
 
 
 def runway_lines(R_camera_from_runway, p_camera_runway_m, runway: Runway) -> dict:
-    """SPEC ``(rho, theta)`` of the left edge, right edge and centre line, each a pair of (n,) arrays."""
+    """SPEC ``(rho, theta)`` of the left edge, right edge and centre line.
+
+    Parameters
+    ----------
+    R_camera_from_runway : ndarray, shape (n, 3, 3)
+        Runway-to-camera rotation at each frame.
+    p_camera_runway_m : ndarray, shape (n, 3)
+        Camera centre in the runway frame, metres.
+    runway : visland.runway.Runway
+        Its edge and centre lines (:meth:`Runway.edge_lines_runway_m`).
+
+    Returns
+    -------
+    dict of str to (ndarray, ndarray)
+        ``{"left", "right", "center"}`` -> ``(rho, theta_rad)``, each shape (n,): lines
+        ``x cos(theta) + y sin(theta) = rho`` in normalised coordinates, theta in [-pi/2, pi/2).
+    """
     out = {}
     for name, (point_R, direction_R) in runway.edge_lines_runway_m().items():
         rel = point_R[None, :] - np.asarray(p_camera_runway_m)
@@ -129,10 +192,20 @@ def runway_lines(R_camera_from_runway, p_camera_runway_m, runway: Runway) -> dic
 
 
 def vanishing_point_xy(R_camera_from_runway, direction_runway=None) -> np.ndarray:
-    """Normalised image of the runway direction, shape (n, 2).
+    """Normalised image of the runway direction.
 
-    ``direction_runway`` (3,) is the centreline's direction in R (default runway +x, a level
-    runway; :meth:`visland.runway.Runway.direction_runway` for a sloped one).
+    Parameters
+    ----------
+    R_camera_from_runway : ndarray, shape (n, 3, 3)
+        Runway-to-camera rotation at each frame.
+    direction_runway : array_like, shape (3,), optional
+        The centreline's direction in R (default runway +x, a level runway;
+        :meth:`visland.runway.Runway.direction_runway` for a sloped one).
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+        Normalised coordinates ``(x, y)`` of the vanishing point.
     """
     R = np.asarray(R_camera_from_runway)
     d = R[..., :, 0] if direction_runway is None else R @ np.asarray(direction_runway, dtype=float)
@@ -140,7 +213,18 @@ def vanishing_point_xy(R_camera_from_runway, direction_runway=None) -> np.ndarra
 
 
 def horizon_line(R_camera_from_runway) -> tuple[np.ndarray, np.ndarray]:
-    """SPEC ``(rho, theta)`` of the horizon: directions orthogonal to the down axis ``n``."""
+    """SPEC ``(rho, theta)`` of the horizon: directions orthogonal to the down axis ``n``.
+
+    Parameters
+    ----------
+    R_camera_from_runway : ndarray, shape (..., 3, 3)
+        Runway-to-camera rotation (only roll, pitch and the mounting matter).
+
+    Returns
+    -------
+    rho, theta_rad : ndarray, shape (...)
+        The horizon ``x cos(theta) + y sin(theta) = rho`` in normalised coordinates.
+    """
     n = np.asarray(R_camera_from_runway)[..., :, 2]
     h = np.hypot(n[..., 0], n[..., 1])
     return wrap_line_chart(-n[..., 2] / h, np.arctan2(n[..., 1], n[..., 0]))
@@ -164,6 +248,21 @@ def dF_from_vanishing_point(vp_xy, horizon_rho, horizon_theta, camera: CameraMod
 
     The vanishing point is projected on the horizon, so a measured point slightly off the
     horizon still gives a d_F.
+
+    Parameters
+    ----------
+    vp_xy : array_like, shape (..., 2)
+        Vanishing point, normalised coordinates.
+    horizon_rho, horizon_theta : array_like, shape (...)
+        The horizon line (SPEC chart, normalised coordinates; theta in radians).
+    camera : visland.camera.CameraModel
+        Intrinsics (pixels).
+
+    Returns
+    -------
+    ndarray, shape (...)
+        d_F in pixels, from Q (the horizon at u = cx) to the vanishing point, positive to the
+        right (seed 001 eq. 18).
     """
     q_px, t = _horizon_geometry(horizon_rho, horizon_theta, camera)
     vp_px = camera.normalized_to_pixels(vp_xy)
@@ -177,6 +276,20 @@ def dpsi_from_dF(dF_px, roll_rad, pitch_rad, camera: CameraModel) -> np.ndarray:
     is ``Q + d_F t`` on the horizon; back-projected into the level heading frame L
     (body with roll and pitch undone: ``R_L_from_camera = Ry(pitch) Rx(roll) R_body_from_camera``)
     its direction is ``(cos dpsi, -sin dpsi, 0)``.
+
+    Parameters
+    ----------
+    dF_px : array_like, shape (...)
+        d_F in pixels (:func:`dF_from_vanishing_point`).
+    roll_rad, pitch_rad : array_like, shape (...)
+        Inertial roll and pitch, radians.
+    camera : visland.camera.CameraModel
+        Intrinsics and mounting.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``dpsi = psi - psi_rwy`` in radians.
     """
     roll = np.asarray(roll_rad, dtype=float)
     pitch = np.asarray(pitch_rad, dtype=float)
@@ -193,7 +306,19 @@ def dpsi_from_dF(dF_px, roll_rad, pitch_rad, camera: CameraModel) -> np.ndarray:
 def virtual_from_pixels(uv, R_runway_from_camera, camera: CameraModel) -> np.ndarray:
     """Virtual-frame coordinates ``y_v = (X_v/Z_v, Y_v/Z_v)`` of pixel points (thesis 3.23).
 
-    ``uv`` has shape (n, k, 2) (k points per frame) and ``R_runway_from_camera`` (n, 3, 3).
+    Parameters
+    ----------
+    uv : array_like, shape (n, k, 2)
+        k pixel points per frame (SPEC pixel convention).
+    R_runway_from_camera : ndarray, shape (n, 3, 3)
+        Camera-to-runway rotation at each frame (the virtual frame V has the runway's axes).
+    camera : visland.camera.CameraModel
+        Intrinsics (pixels to normalised coordinates).
+
+    Returns
+    -------
+    ndarray, shape (n, k, 2)
+        ``y_v``, dimensionless.
     """
     uv = np.asarray(uv, dtype=float)
     xy = camera.pixels_to_normalized(uv)
@@ -208,12 +333,19 @@ def point_virtual_dynamics(y_v, eta, v_runway_mps) -> tuple[np.ndarray, np.ndarr
 
     Parameters
     ----------
-    y_v : (..., k, 2) virtual coordinates of k runway points.
-    eta : (...,) inverse height.
-    v_runway_mps : (..., 3) camera velocity in runway axes (z down).
+    y_v : array_like, shape (..., k, 2)
+        Virtual coordinates of k runway points.
+    eta : array_like, shape (...)
+        Inverse height ``1/dH``, 1/m.
+    v_runway_mps : array_like, shape (..., 3)
+        Camera velocity in runway axes (z down), m/s.
 
-    Returns ``(y_v_dot (..., k, 2), eta_dot (...))``; ``y_v_dot = Phi * eta`` with
-    ``Phi = v3 y - v12`` (the observability terms of 3.26 / 3.30).
+    Returns
+    -------
+    y_v_dot : ndarray, shape (..., k, 2)
+        ``Phi * eta`` with ``Phi = v3 y - v12`` (the observability terms of 3.26 / 3.30), 1/s.
+    eta_dot : ndarray, shape (...)
+        ``v3 eta^2``, 1/(m s).
     """
     y_v = np.asarray(y_v, dtype=float)
     v = np.asarray(v_runway_mps, dtype=float)
@@ -229,12 +361,21 @@ def line_dynamics_terms(rho, theta, v_camera_mps, omega_camera_rps, n_camera) ->
 
     Parameters
     ----------
-    rho, theta : (...,) line in the SPEC chart.
-    v_camera_mps : (..., 3) camera velocity in C.
-    omega_camera_rps : (..., 3) camera angular velocity in C.
-    n_camera : (..., 3) runway down axis in C (thesis 3.33).
+    rho, theta : array_like, shape (...)
+        Line in the SPEC chart (normalised coordinates; theta in radians).
+    v_camera_mps : array_like, shape (..., 3)
+        Camera velocity in C, m/s.
+    omega_camera_rps : array_like, shape (..., 3)
+        Camera angular velocity in C, rad/s.
+    n_camera : array_like, shape (..., 3)
+        Runway down axis in C (thesis 3.33), unit vector.
 
-    Returns ``g (..., 2)`` and ``Phi (..., 2)``, ordered (theta, rho).
+    Returns
+    -------
+    g : ndarray, shape (..., 2)
+        The rotational terms, ordered (theta, rho), per second.
+    Phi : ndarray, shape (..., 2)
+        The coefficients of eta, ordered (theta, rho), m/s.
     """
     rho = np.asarray(rho, dtype=float)
     c, s = np.cos(theta), np.sin(theta)
@@ -250,13 +391,43 @@ def line_dynamics_terms(rho, theta, v_camera_mps, omega_camera_rps, n_camera) ->
 
 
 def observability_points(y_v, v_runway_mps) -> np.ndarray:
-    """Thesis 3.30: ``sum over points of (v3 y1 - v1)^2 + (v3 y2 - v2)^2``, in (m/s)^2."""
+    """Thesis 3.30: ``sum over points of (v3 y1 - v1)^2 + (v3 y2 - v2)^2``, in (m/s)^2.
+
+    Parameters
+    ----------
+    y_v : array_like, shape (..., k, 2)
+        Virtual coordinates of the k points.
+    v_runway_mps : array_like, shape (..., 3)
+        Camera velocity in runway axes (z down), m/s.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The observability index, (m/s)^2.
+    """
     phi = np.asarray(v_runway_mps)[..., None, 2:3] * np.asarray(y_v) - np.asarray(v_runway_mps)[..., None, 0:2]
     return np.sum(phi ** 2, axis=(-1, -2))
 
 
 def observability_lines(lines, v_camera_mps, omega_camera_rps, n_camera) -> np.ndarray:
-    """Thesis 3.40: squared norm of the eta coefficients of the stacked edge dynamics (3.39)."""
+    """Thesis 3.40: squared norm of the eta coefficients of the stacked edge dynamics (3.39).
+
+    Parameters
+    ----------
+    lines : iterable of (rho, theta)
+        The edges, each in the SPEC chart (arrays of shape (...)).
+    v_camera_mps : array_like, shape (..., 3)
+        Camera velocity in C, m/s.
+    omega_camera_rps : array_like, shape (..., 3)
+        Camera angular velocity in C, rad/s.
+    n_camera : array_like, shape (..., 3)
+        Runway down axis in C.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The observability index, (m/s)^2.
+    """
     total = 0.0
     for rho, theta in lines:
         _, phi = line_dynamics_terms(rho, theta, v_camera_mps, omega_camera_rps, n_camera)
@@ -269,11 +440,24 @@ def observability_lines(lines, v_camera_mps, omega_camera_rps, n_camera) -> np.n
 class IdealFeatures:
     """Image features of each frame (the ``labels.csv`` content).
 
-    ``corners_uv (n, 4, 2)`` pixels (NaN behind the camera), ``corners_visible (n, 4)``,
-    ``lines`` dict of (rho, theta) for "left", "right", "center", ``dF_px (n,)``,
-    ``dpsi_rad (n,)`` recovered from d_F with the *nominal* camera and the inertial attitude,
-    ``yv_near (n, 2, 2)`` virtual coordinates of P' and P'' (thesis 3.23) computed from the
-    pixels the same way, ``obs_points`` (3.30) and ``obs_lines`` (3.40) on the true motion.
+    Attributes
+    ----------
+    t_s : ndarray, shape (n,)
+        Frame times, seconds.
+    corners_uv : ndarray, shape (n, 4, 2)
+        Corner pixels in :data:`visland.runway.CORNER_NAMES` order (NaN behind the camera).
+    corners_visible : ndarray of bool, shape (n, 4)
+        In front of the camera and inside the image.
+    lines : dict of str to (ndarray, ndarray)
+        ``{"left", "right", "center"}`` -> ``(rho, theta_rad)`` SPEC lines, each (n,).
+    dF_px : ndarray, shape (n,)
+        d_F, pixels (seed 001 eq. 18).
+    dpsi_rad : ndarray, shape (n,)
+        Heading deviation recovered from d_F with the *nominal* camera and the inertial attitude.
+    yv_near : ndarray, shape (n, 2, 2)
+        Virtual coordinates of P' and P'' (thesis 3.23) computed from the pixels the same way.
+    obs_points, obs_lines : ndarray, shape (n,)
+        Observability indices 3.30 and 3.40 on the true motion, (m/s)^2.
     """
 
     t_s: np.ndarray

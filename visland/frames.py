@@ -46,19 +46,52 @@ _R_BODY_FROM_CAMERA_ZERO_MOUNT = np.array(
 
 
 def rot_x(angle_rad: float) -> np.ndarray:
-    """Rotation matrix of a frame turned by ``angle_rad`` about x: ``R_parent_from_child``."""
+    """Rotation matrix of a frame turned by ``angle_rad`` about x: ``R_parent_from_child``.
+
+    Parameters
+    ----------
+    angle_rad : float
+        Rotation angle in radians, positive counter-clockwise looking down the x axis.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Maps child-frame coordinates to parent-frame coordinates.
+    """
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def rot_y(angle_rad: float) -> np.ndarray:
-    """Rotation matrix of a frame turned by ``angle_rad`` about y: ``R_parent_from_child``."""
+    """Rotation matrix of a frame turned by ``angle_rad`` about y: ``R_parent_from_child``.
+
+    Parameters
+    ----------
+    angle_rad : float
+        Rotation angle in radians, positive counter-clockwise looking down the y axis.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Maps child-frame coordinates to parent-frame coordinates.
+    """
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def rot_z(angle_rad: float) -> np.ndarray:
-    """Rotation matrix of a frame turned by ``angle_rad`` about z: ``R_parent_from_child``."""
+    """Rotation matrix of a frame turned by ``angle_rad`` about z: ``R_parent_from_child``.
+
+    Parameters
+    ----------
+    angle_rad : float
+        Rotation angle in radians, positive counter-clockwise looking down the z axis.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Maps child-frame coordinates to parent-frame coordinates.
+    """
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
@@ -70,6 +103,16 @@ def R_ned_from_body(roll_rad: float, pitch_rad: float, heading_rad: float) -> np
     matrix 0R_c of eq. 3.17 (written there from the inertial frame to the body frame).
     The same function gives ``R_runway_from_body`` when called with the heading deviation
     ``dpsi = psi - psi_rwy`` instead of the true heading.
+
+    Parameters
+    ----------
+    roll_rad, pitch_rad, heading_rad : float
+        ZYX Euler angles of the body relative to NED, radians.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``R_ned_from_body``: body coordinates (x forward, y right wing, z down) to NED.
     """
     return rot_z(heading_rad) @ rot_y(pitch_rad) @ rot_x(roll_rad)
 
@@ -77,7 +120,20 @@ def R_ned_from_body(roll_rad: float, pitch_rad: float, heading_rad: float) -> np
 def euler_zyx_from_R_ned_from_body(R_ned_from_body_: np.ndarray) -> tuple[float, float, float]:
     """Inverse of :func:`R_ned_from_body`: ``(roll_rad, pitch_rad, heading_rad)``.
 
-    Pitch is in [-pi/2, pi/2]; roll and heading in (-pi, pi].
+    Parameters
+    ----------
+    R_ned_from_body_ : array_like, shape (3, 3)
+        A body-to-NED rotation.
+
+    Returns
+    -------
+    roll_rad, pitch_rad, heading_rad : float
+        Pitch in [-pi/2, pi/2]; roll and heading in (-pi, pi].
+
+    Raises
+    ------
+    ValueError
+        When the matrix is not 3x3.
     """
     R = np.asarray(R_ned_from_body_, dtype=float)
     if R.shape != (3, 3):
@@ -89,7 +145,18 @@ def euler_zyx_from_R_ned_from_body(R_ned_from_body_: np.ndarray) -> tuple[float,
 
 
 def R_ned_from_runway(runway_heading_rad: float) -> np.ndarray:
-    """Runway-to-NED rotation: the runway axes are NED turned by the runway heading."""
+    """Runway-to-NED rotation: the runway axes are NED turned by the runway heading.
+
+    Parameters
+    ----------
+    runway_heading_rad : float
+        True heading of the runway's x axis (landing direction), radians from north.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``R_ned_from_runway``.
+    """
     return rot_z(runway_heading_rad)
 
 
@@ -100,6 +167,16 @@ def R_body_from_camera(mount_rpy_rad) -> np.ndarray:
     (ZYX: yaw, then pitch, then roll), as in SPEC.md ``camera.json``. ``[0, 0, 0]`` puts the
     optical axis along body x, image x along body y and image y along body z; a negative
     pitch looks down.
+
+    Parameters
+    ----------
+    mount_rpy_rad : sequence of 3 floats
+        The camera's roll, pitch and yaw relative to the body, radians.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``R_body_from_camera``: OpenCV camera coordinates (x right, y down, z forward) to body.
     """
     roll, pitch, yaw = (float(a) for a in mount_rpy_rad)
     R_body_from_mount = rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
@@ -112,6 +189,20 @@ def R_camera_from_runway(roll_rad: float, pitch_rad: float, dpsi_rad: float,
 
     ``R_camera_from_runway = R_body_from_camera^T R_runway_from_body^T`` with
     ``R_runway_from_body = Rz(dpsi) Ry(pitch) Rx(roll)``.
+
+    Parameters
+    ----------
+    roll_rad, pitch_rad : float
+        Body roll and pitch, radians.
+    dpsi_rad : float
+        Heading deviation ``psi - psi_rwy`` of the body from the runway axis, radians.
+    mount_rpy_rad : sequence of 3 floats
+        The camera's roll, pitch and yaw relative to the body, radians.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        ``R_camera_from_runway``: runway coordinates to OpenCV camera coordinates.
     """
     R_runway_from_body = R_ned_from_body(roll_rad, pitch_rad, dpsi_rad)
     return (R_runway_from_body @ R_body_from_camera(mount_rpy_rad)).T
@@ -122,6 +213,18 @@ def body_rates_from_euler_rates(roll_rad, pitch_rad, roll_rate, pitch_rate, head
 
     p = phi' - psi' sin(theta); q = theta' cos(phi) + psi' cos(theta) sin(phi);
     r = -theta' sin(phi) + psi' cos(theta) cos(phi). Works on scalars or arrays.
+
+    Parameters
+    ----------
+    roll_rad, pitch_rad : float or ndarray
+        Roll ``phi`` and pitch ``theta``, radians.
+    roll_rate, pitch_rate, heading_rate : float or ndarray
+        Euler angle rates ``phi'``, ``theta'``, ``psi'``, rad/s.
+
+    Returns
+    -------
+    p, q, r : float or ndarray
+        Body rates about body x, y, z, rad/s (the shape of the inputs).
     """
     sphi, cphi = np.sin(roll_rad), np.cos(roll_rad)
     sth, cth = np.sin(pitch_rad), np.cos(pitch_rad)
@@ -132,5 +235,16 @@ def body_rates_from_euler_rates(roll_rad, pitch_rad, roll_rate, pitch_rate, head
 
 
 def wrap_pi(angle_rad):
-    """Wrap an angle (scalar or array) to [-pi, pi)."""
+    """Wrap an angle (scalar or array) to [-pi, pi).
+
+    Parameters
+    ----------
+    angle_rad : float or array_like
+        Angle(s) in radians.
+
+    Returns
+    -------
+    ndarray
+        The same angle(s) in [-pi, pi) (a 0-d array for a scalar).
+    """
     return (np.asarray(angle_rad) + np.pi) % (2.0 * np.pi) - np.pi

@@ -47,8 +47,17 @@ class Wind:
     gust : bool
         Add the gust: starts ``gust_onset_m`` before the threshold and decays as
         ``exp(-t / gust_time_constant_s)``.
+    gust_onset_m : float
+        Distance before the threshold at which the gust starts, metres.
     gust_crosswind_mps, gust_updraft_mps : float
         Initial gust components along runway +y and upwards.
+    gust_time_constant_s : float
+        Decay time constant of the gust, seconds.
+
+    Raises
+    ------
+    ValueError
+        A field out of its range, naming it (``wind.NAME``).
     """
 
     crosswind_mps: float = 0.0
@@ -73,7 +82,39 @@ class Wind:
 
 @dataclass(frozen=True)
 class Scenario:
-    """Initial conditions of an approach and its environment (see module docstring)."""
+    """Initial conditions of an approach and its environment (see module docstring).
+
+    Parameters
+    ----------
+    name : str
+        Non-empty name (the built-in ones: :data:`BUILTIN_SCENARIOS`).
+    dx_m : float
+        Start along the runway axis relative to the aiming point E, metres (negative on
+        approach, -12000 .. -1500).
+    dy_m : float
+        Start across the runway axis, metres, right of the centreline positive (runway frame).
+    dgs_m : float
+        Start height above the 3 deg glide path, metres.
+    dpsi_deg : float
+        Heading minus runway heading, degrees.
+    gamma_deg : float, default 0
+        Flight-path angle, degrees (negative descending; 0: level flight).
+    roll_deg : float, default 0
+        Initial roll, degrees.
+    airspeed_kt : float, default 140
+        Airspeed, knots.
+    runway : visland.runway.Runway
+        The runway (size, aiming distance, heading, slope).
+    wind : Wind
+        Steady wind and gust (default: calm).
+    description : str
+        One line for ``visland scenarios``.
+
+    Raises
+    ------
+    ValueError
+        A field out of its range (naming it), or a start below 60 m above the runway.
+    """
 
     name: str
     dx_m: float
@@ -163,11 +204,27 @@ BUILTIN_SCENARIOS: dict[str, Scenario] = {s.name: s for s in [
 
 
 def scenario_names() -> list[str]:
+    """The built-in scenarios' names, in listing order."""
     return list(BUILTIN_SCENARIOS)
 
 
 def get_scenario(name: str) -> Scenario:
-    """A built-in scenario by name; the error lists the known ones."""
+    """A built-in scenario by name; the error lists the known ones.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`BUILTIN_SCENARIOS` (``thesis-1``, ``ecc-2``, ...).
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ValueError
+        An unknown name, listing the known ones.
+    """
     try:
         return BUILTIN_SCENARIOS[name]
     except KeyError:
@@ -236,6 +293,20 @@ def load_scenario_file(path) -> Scenario:
         [wind]                    # optional
         crosswind_mps = 3.0
         gust = true
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file.
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ValueError
+        One sentence naming the file and the key that is missing, unknown or out of range.
     """
     path = Path(path)
     data = read_toml_object(path, "scenario file")
@@ -243,7 +314,18 @@ def load_scenario_file(path) -> Scenario:
 
 
 def resolve_scenario(name_or_path: str) -> Scenario:
-    """A built-in scenario name, or a path to a TOML scenario file."""
+    """A built-in scenario name, or a path to a TOML scenario file.
+
+    Parameters
+    ----------
+    name_or_path : str
+        A built-in name (:func:`get_scenario`), or a ``.toml`` file or any existing file
+        (:func:`load_scenario_file`).
+
+    Returns
+    -------
+    Scenario
+    """
     if name_or_path in BUILTIN_SCENARIOS:
         return BUILTIN_SCENARIOS[name_or_path]
     if name_or_path.endswith(".toml") or Path(name_or_path).is_file():
@@ -252,5 +334,17 @@ def resolve_scenario(name_or_path: str) -> Scenario:
 
 
 def with_runway(scenario: Scenario, runway: Runway) -> Scenario:
-    """The same scenario over another runway."""
+    """The same scenario over another runway.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The approach.
+    runway : visland.runway.Runway
+        The runway to fly it to (validated again with the scenario).
+
+    Returns
+    -------
+    Scenario
+    """
     return replace(scenario, runway=runway)

@@ -20,7 +20,10 @@ CLI_MODULES = ("visland.cli", "visland.footage_cli", "visland.render.cli", "visl
                "visland.datasets.generate_cli")
 
 #: Modules whose every public function and class documents its parameters.
-DOCUMENTED_MODULES = ("visland.exports", "visland.sensors", "visland.folder", "visland.tracking.run", "visland.tracking.motion")
+DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.features", "visland.folder", "visland.frames",
+                      "visland.progress", "visland.runway", "visland.scenarios", "visland.sensors",
+                      "visland.render.params", "visland.tracking.anchoring", "visland.tracking.motion",
+                      "visland.tracking.params", "visland.tracking.run", "visland.tracking.tracker")
 
 
 def _callables(module_names):
