@@ -121,8 +121,7 @@ def register(subparsers):
     Parameters
     ----------
     subparsers : argparse._SubParsersAction
-        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
-        command added sets ``func``, called with the parsed arguments, returning the exit status.
+        Gains ``process``, ``compare``, ``campaign``, ``demo`` and ``fly``.
     """
     from visland.cli import add_frame_source_arguments
     from visland.estimation.cli import add_initial_guess_arguments

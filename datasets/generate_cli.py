@@ -19,8 +19,8 @@ def register(subparsers) -> None:
     Parameters
     ----------
     subparsers : argparse._SubParsersAction
-        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
-        command added sets ``func``, called with the parsed arguments, returning the exit status.
+        The parser's commands; ``generate`` is added with the simulation options of
+        :func:`visland.cli.add_simulation_arguments` and the scene options.
     """
     from visland.cli import add_simulation_arguments
     p = subparsers.add_parser(

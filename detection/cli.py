@@ -63,8 +63,7 @@ def register(subparsers):
     Parameters
     ----------
     subparsers : argparse._SubParsersAction
-        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
-        command added sets ``func``, called with the parsed arguments, returning the exit status.
+        ``visland``'s commands (:func:`visland.cli.build_parser`), to which ``detect`` is added.
     """
     from visland.cli import add_frame_source_arguments
     p = subparsers.add_parser(
@@ -91,7 +90,7 @@ def register_bench(bench_subparsers):
     Parameters
     ----------
     bench_subparsers : argparse._SubParsersAction
-        The targets of ``visland bench`` (:func:`visland.cli.build_parser`).
+        Gains ``detect`` (acquisition and tracking speed).
     """
     p = bench_subparsers.add_parser(
         "detect", help="detection speed: whole-frame acquisition and region-of-interest tracking",

@@ -87,8 +87,7 @@ def register(subparsers):
     Parameters
     ----------
     subparsers : argparse._SubParsersAction
-        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
-        command added sets ``func``, called with the parsed arguments, returning the exit status.
+        Gains ``estimate`` and ``study``; each command's ``func(args)`` returns the exit status.
     """
     p = subparsers.add_parser(
         "estimate", help="run observers on a folder's measurements and telemetry; write estimates.csv",
@@ -134,7 +133,7 @@ def register_bench(bench_subparsers):
     Parameters
     ----------
     bench_subparsers : argparse._SubParsersAction
-        The targets of ``visland bench`` (:func:`visland.cli.build_parser`).
+        ``visland bench``'s targets; ``estimate`` times every observer.
     """
     p = bench_subparsers.add_parser("estimate", help="time every observer on a 100 s, 50 Hz approach",
                                     description="Time each observer's steps over a 100 s, 50 Hz approach (target "

@@ -11,8 +11,7 @@ def register(subparsers):
     Parameters
     ----------
     subparsers : argparse._SubParsersAction
-        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
-        command added sets ``func``, called with the parsed arguments, returning the exit status.
+        Left as it is: frames are rendered by ``visland generate`` (:mod:`visland.datasets`).
     """
 
 
@@ -22,7 +21,7 @@ def register_bench(bench_subparsers):
     Parameters
     ----------
     bench_subparsers : argparse._SubParsersAction
-        The targets of ``visland bench`` (:func:`visland.cli.build_parser`).
+        The targets of ``visland bench``, to which ``render`` is added.
     """
     p = bench_subparsers.add_parser(
         "render", help="time the renderer: seconds per frame with readback, with PNG writing, per quality option")

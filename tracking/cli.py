@@ -15,8 +15,7 @@ def register(subparsers):
     Parameters
     ----------
     subparsers : argparse._SubParsersAction
-        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
-        command added sets ``func``, called with the parsed arguments, returning the exit status.
+        Where ``track`` goes (the commands of :func:`visland.cli.build_parser`).
     """
     from visland.cli import add_frame_source_arguments
     p = subparsers.add_parser(
@@ -60,7 +59,7 @@ def register_bench(bench_subparsers):
     Parameters
     ----------
     bench_subparsers : argparse._SubParsersAction
-        The targets of ``visland bench`` (:func:`visland.cli.build_parser`).
+        Where ``visland bench track`` is registered.
     """
     p = bench_subparsers.add_parser(
         "track", help="tracker speed: frames per second for N points (ends with a JSON line)",

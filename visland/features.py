@@ -112,10 +112,9 @@ def batch_R_camera_from_runway(roll_rad, pitch_rad, dpsi_rad, mount_rpy_rad) -> 
 
     Parameters
     ----------
-    roll_rad, pitch_rad : array_like, shape (...)
-        Body roll and pitch, radians.
-    dpsi_rad : array_like, shape (...)
-        Heading deviation ``psi - psi_rwy`` from the runway axis, radians.
+    roll_rad, pitch_rad, dpsi_rad : array_like, shape (...)
+        Attitude of the body relative to the runway: roll, pitch and heading deviation
+        ``psi - psi_rwy``, radians.
     mount_rpy_rad : sequence of 3 floats
         The camera's roll, pitch and yaw relative to the body, radians.
 
@@ -136,9 +135,9 @@ def project_runway_corners(R_camera_from_runway, p_camera_runway_m, runway: Runw
     Parameters
     ----------
     R_camera_from_runway : ndarray, shape (n, 3, 3)
-        Runway-to-camera rotation at each frame.
+        Rotation from the runway frame R to the camera frame C, one per frame.
     p_camera_runway_m : ndarray, shape (n, 3)
-        Camera centre in the runway frame, metres.
+        Camera centre c in R (metres), one row per frame.
     runway : visland.runway.Runway
         Its corners (:meth:`Runway.corners_runway_m`).
     camera : visland.camera.CameraModel

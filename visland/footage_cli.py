@@ -202,8 +202,7 @@ def register(subparsers):
     Parameters
     ----------
     subparsers : argparse._SubParsersAction
-        The subcommands of the ``visland`` parser (:func:`visland.cli.build_parser`); each
-        command added sets ``func``, called with the parsed arguments, returning the exit status.
+        Gains ``calibrate`` and ``mask`` (raw footage in, ``camera.json`` or a mask out).
     """
     p = subparsers.add_parser(
         "calibrate", help="camera.json with lens distortion from chessboard footage (or from a field of view)",

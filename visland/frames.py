@@ -51,7 +51,7 @@ def rot_x(angle_rad: float) -> np.ndarray:
     Parameters
     ----------
     angle_rad : float
-        Rotation angle in radians, positive counter-clockwise looking down the x axis.
+        Radians, positive turning y towards z (a roll to the right, for the body).
 
     Returns
     -------
@@ -68,29 +68,23 @@ def rot_y(angle_rad: float) -> np.ndarray:
     Parameters
     ----------
     angle_rad : float
-        Rotation angle in radians, positive counter-clockwise looking down the y axis.
-
-    Returns
-    -------
-    ndarray, shape (3, 3)
-        Maps child-frame coordinates to parent-frame coordinates.
+        Radians, positive turning z towards x (a pitch up, for the body).
     """
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def rot_z(angle_rad: float) -> np.ndarray:
-    """Rotation matrix of a frame turned by ``angle_rad`` about z: ``R_parent_from_child``.
+    """``R_parent_from_child`` of a frame turned by ``angle_rad`` about z (the heading's axis).
 
     Parameters
     ----------
     angle_rad : float
-        Rotation angle in radians, positive counter-clockwise looking down the z axis.
+        Radians, positive turning x towards y (to the right, for NED and the body).
 
     Returns
     -------
     ndarray, shape (3, 3)
-        Maps child-frame coordinates to parent-frame coordinates.
     """
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])

@@ -219,6 +219,7 @@ def get_scenario(name: str) -> Scenario:
     Returns
     -------
     Scenario
+        The built-in scenario (frozen: shared by every caller).
 
     Raises
     ------
