@@ -77,7 +77,17 @@ _UMASK = _read_umask()
 
 
 class Table(dict):
-    """Columns of a CSV file as numpy arrays (text columns as arrays of str), with its path."""
+    """Columns of a CSV file as numpy arrays (text columns as arrays of str), with its path.
+
+    Parameters
+    ----------
+    columns : dict of str to ndarray
+        Column name -> values, one per data row (numbers as float, NaN for an allowed empty cell).
+    path : Path
+        The file read (named in errors).
+    column_order : list of str
+        The columns in file order (kept as ``column_order`` for writing back).
+    """
 
     def __init__(self, columns: dict, path: Path, column_order: list):
         super().__init__(columns)
@@ -91,7 +101,19 @@ class Table(dict):
 
 # --------------------------------------------------------------------------- writing
 def json_ready(value):
-    """``value`` with numpy scalars turned into Python numbers and NaN/inf into None (JSON null)."""
+    """``value`` with numpy scalars turned into Python numbers and NaN/inf into None (JSON null).
+
+    Parameters
+    ----------
+    value : object
+        A number, or dicts, lists and tuples of them (walked recursively); anything else is
+        returned as is.
+
+    Returns
+    -------
+    object
+        The same structure, ready for :func:`json.dumps` (tuples become lists).
+    """
     if isinstance(value, dict):
         return {k: json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -121,7 +143,22 @@ def _format_cell(value) -> str:
 
 
 def write_csv(path, columns: dict, order=None) -> None:
-    """Write columns (equal-length sequences) as CSV, atomically; NaN and None become empty cells."""
+    """Write columns (equal-length sequences) as CSV, atomically; NaN and None become empty cells.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write (replaced if it exists).
+    columns : dict of str to sequence
+        Column name -> values (numbers written with 12 significant digits, booleans as 1/0).
+    order : sequence of str, optional
+        The columns to write, in order (default: every column, in dict order).
+
+    Raises
+    ------
+    ValueError
+        A column of ``order`` missing from ``columns``, or columns of different lengths.
+    """
     order = list(order) if order is not None else list(columns)
     missing = [c for c in order if c not in columns]
     if missing:
@@ -140,7 +177,15 @@ def write_csv(path, columns: dict, order=None) -> None:
 
 
 def atomic_write_bytes(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename."""
+    """Write ``data`` to ``path`` through a temporary file in the same folder and a rename.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write; a reader sees the old file or the new one, never half of one.
+    data : bytes
+        The content (the file gets the usual permissions, 0666 less the umask).
+    """
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
@@ -159,6 +204,15 @@ def atomic_write_bytes(path, data: bytes) -> None:
 
 
 def atomic_write_text(path, text: str) -> None:
+    """:func:`atomic_write_bytes` for text.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file to write.
+    text : str
+        Written as UTF-8.
+    """
     atomic_write_bytes(path, text.encode("utf-8"))
 
 
@@ -168,6 +222,19 @@ def staged_output_dir(out_dir, force: bool = False):
 
     An existing ``out_dir`` is refused unless ``force``; on failure nothing is left behind
     (and a forced run keeps the old folder).
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        The folder the command writes.
+    force : bool, default False
+        Replace an existing ``out_dir`` (only once the new one is complete).
+
+    Yields
+    ------
+    Path
+        The staging folder to write into; a ``ValueError`` raised inside names ``out_dir``
+        instead of it.
     """
     out_dir = Path(out_dir)
     if out_dir.exists() and not force:
@@ -273,7 +340,17 @@ def read_csv(path, required, text_columns=(), optional_empty=(), name=None) -> T
 
 
 def check_time_column(table: Table, column: str = "t_s", strictly: bool = True) -> None:
-    """Raise if the time column does not increase (naming the first offending line)."""
+    """Raise if the time column does not increase (naming the first offending line).
+
+    Parameters
+    ----------
+    table : Table
+        A table read by :func:`read_csv`.
+    column : str, default "t_s"
+        The time column, seconds.
+    strictly : bool, default True
+        Refuse equal successive times too.
+    """
     t = table[column]
     steps = np.diff(t)
     bad = np.nonzero(steps <= 0 if strictly else steps < 0)[0]
@@ -284,7 +361,18 @@ def check_time_column(table: Table, column: str = "t_s", strictly: bool = True) 
 
 def read_telemetry(path) -> Table:
     """``telemetry.csv``: all SPEC columns, finite, strictly increasing time; the optional
-    ``tas_mps`` (true airspeed), when present, positive and finite on every line."""
+    ``tas_mps`` (true airspeed), when present, positive and finite on every line.
+
+    Parameters
+    ----------
+    path : str or Path
+        The telemetry file (degrees, deg/s, m/s as the column names say).
+
+    Returns
+    -------
+    Table
+        The SPEC columns (and ``tas_mps`` when present), time strictly increasing.
+    """
     table = read_csv(path, TELEMETRY_COLUMNS)
     check_time_column(table)
     check_columns(table)
@@ -299,7 +387,18 @@ def read_telemetry(path) -> Table:
 
 
 def read_truth(path) -> Table:
-    """``truth.csv``: the SPEC columns (extras optional), strictly increasing time."""
+    """``truth.csv``: the SPEC columns (extras optional), strictly increasing time.
+
+    Parameters
+    ----------
+    path : str or Path
+        One row per frame: deviations in metres, attitude in degrees.
+
+    Returns
+    -------
+    Table
+        The SPEC columns and any extras, one row per frame.
+    """
     table = read_csv(path, TRUTH_COLUMNS)
     check_time_column(table)
     check_columns(table)
@@ -308,7 +407,18 @@ def read_truth(path) -> Table:
 
 
 def read_labels(path) -> Table:
-    """``labels.csv``: the SPEC labels schema; feature cells may be empty (not visible)."""
+    """``labels.csv``: the SPEC labels schema; feature cells may be empty (not visible).
+
+    Parameters
+    ----------
+    path : str or Path
+        Exact features of a generated dataset, one row per frame (pixels, radians).
+
+    Returns
+    -------
+    Table
+        Empty feature cells as NaN; ``*_visible`` 0 or 1.
+    """
     table = read_csv(path, LABEL_COLUMNS, optional_empty=_FEATURE_COLUMNS)
     check_time_column(table)
     _check_frames_and_flags(table)
@@ -328,6 +438,16 @@ def read_measurements(path) -> Table:
     SPEC columns); what it lacks defaults: ``frame`` the row index, ``source`` "external",
     ``found`` 1 where the row holds a corner or a line, ``reason`` empty, ``confidence`` empty,
     ``*_visible`` 1 where the corner's two coordinates are given, other features empty.
+
+    Parameters
+    ----------
+    path : str or Path
+        A detector's, tracker's or another tool's features, one row per frame.
+
+    Returns
+    -------
+    Table
+        Every :data:`MEASUREMENT_COLUMNS` column, the missing ones filled as described.
     """
     table = read_csv(path, ("t_s",), text_columns=("source", "reason"),
                      optional_empty=_FEATURE_COLUMNS | {"confidence"})
@@ -404,7 +524,18 @@ def _check_frames_and_flags(table: Table) -> None:
 
 
 def read_frames_csv(path) -> Table:
-    """``frames.csv``: ``frame,t_s`` with increasing time."""
+    """``frames.csv``: ``frame,t_s`` with increasing time.
+
+    Parameters
+    ----------
+    path : str or Path
+        Frame index or file name, and time in seconds, one row per image.
+
+    Returns
+    -------
+    Table
+        ``frame`` as text (an index or a file name), ``t_s`` increasing.
+    """
     table = read_csv(path, FRAMES_COLUMNS, text_columns=("frame",))
     check_time_column(table)
     check_columns(table, columns=("t_s",))
@@ -413,6 +544,17 @@ def read_frames_csv(path) -> Table:
 
 
 def read_estimates(path) -> Table:
-    """``estimates.csv``: one row per observer per frame; estimate cells may be empty (coasting)."""
+    """``estimates.csv``: one row per observer per frame; estimate cells may be empty (coasting).
+
+    Parameters
+    ----------
+    path : str or Path
+        As written by ``visland estimate`` or ``visland process``.
+
+    Returns
+    -------
+    Table
+        ``observer`` as text; coasting estimates as NaN.
+    """
     return read_csv(path, ESTIMATE_COLUMNS, text_columns=("observer",),
                     optional_empty={"dx_m", "dy_m", "dh_m", "width_m", "dpsi_deg", "observability"})

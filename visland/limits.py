@@ -26,7 +26,17 @@ __all__ = ["Limit", "COLUMN_LIMITS", "FRAME_INTERVAL_S", "PIXEL_MARGIN", "FOCAL_
 
 @dataclass(frozen=True)
 class Limit:
-    """A closed interval ``[low, high]`` in ``unit``, and why."""
+    """A closed interval ``[low, high]`` in ``unit``, and why.
+
+    Attributes
+    ----------
+    low, high : float
+        The interval's ends, in ``unit``.
+    unit : str
+        The unit as written in messages (``"deg"``, ``"m/s"``, ``"px"``...).
+    why : str
+        What makes a value outside implausible, quoted in the error.
+    """
 
     low: float
     high: float
@@ -88,7 +98,19 @@ def _line_of(table, index: int) -> int:
 
 def check_columns(table, name: str | None = None, columns=None, rows=None) -> None:
     """Raise on the first cell of ``table`` outside its :data:`COLUMN_LIMITS` limit (NaN cells,
-    which mean "not measured", pass). ``rows``: a boolean mask of the rows to check."""
+    which mean "not measured", pass).
+
+    Parameters
+    ----------
+    table : visland.contracts.Table
+        A table as read.
+    name : str, optional
+        How the file is named in the error (default its path).
+    columns : iterable of str, optional
+        The columns to check (default every column of the file).
+    rows : ndarray of bool, shape (n_rows,), optional
+        The rows to check (default all).
+    """
     label = name or str(table.path)
     for column in (columns or table.column_order):
         limit = COLUMN_LIMITS.get(column)
@@ -107,7 +129,15 @@ def check_columns(table, name: str | None = None, columns=None, rows=None) -> No
 
 
 def check_frame_times(times_s, name: str) -> None:
-    """Frame times: increasing by :data:`FRAME_INTERVAL_S` at most and at least."""
+    """Frame times: increasing by :data:`FRAME_INTERVAL_S` at most and at least.
+
+    Parameters
+    ----------
+    times_s : array_like, shape (n,)
+        Frame times, seconds (fewer than two pass).
+    name : str
+        What the times are called in the error (a file, or "frame times of DIR").
+    """
     times = np.asarray(times_s, dtype=float)
     if times.size < 2:
         return
@@ -121,7 +151,19 @@ def check_frame_times(times_s, name: str) -> None:
 
 
 def check_telemetry_rate(telemetry_t_s, frame_t_s, name: str, frames_name: str = "") -> None:
-    """SPEC: telemetry at a rate >= the frame rate, over the frames' span (median intervals)."""
+    """SPEC: telemetry at a rate >= the frame rate, over the frames' span (median intervals).
+
+    Parameters
+    ----------
+    telemetry_t_s : array_like, shape (m,)
+        Telemetry times, seconds, on the frames' clock.
+    frame_t_s : array_like, shape (n,)
+        Frame times, seconds; each must lie inside the telemetry's span.
+    name : str
+        The telemetry file, as named in the error.
+    frames_name : str, optional
+        Where the frame times come from, added to the coverage error.
+    """
     telemetry = np.asarray(telemetry_t_s, dtype=float)
     frames = np.asarray(frame_t_s, dtype=float)
     if telemetry.size and frames.size:
@@ -143,7 +185,19 @@ def check_telemetry_rate(telemetry_t_s, frame_t_s, name: str, frames_name: str =
 
 
 def check_rows_at_frames(table, times_s, how: str, what: str) -> None:
-    """``table`` (truth, labels) has one row per frame, at the frame times ``times_s``."""
+    """``table`` (truth, labels) has one row per frame, at the frame times ``times_s``.
+
+    Parameters
+    ----------
+    table : visland.contracts.Table
+        The truth or labels table (its ``t_s`` column).
+    times_s : array_like, shape (n,)
+        The frame times, seconds (matched to 1e-6 s).
+    how : str
+        Where the frame times come from, quoted in the error.
+    what : str
+        The table's name in the error (``"labels"``, ``"truth"``).
+    """
     times = np.asarray(times_s, dtype=float)
     if table.n_rows != len(times):
         raise ValueError(f"{table.path}: {table.n_rows} rows but there are {len(times)} frames (one row per frame)")
@@ -156,7 +210,19 @@ def check_rows_at_frames(table, times_s, how: str, what: str) -> None:
 
 def check_pixels(table, width: int, height: int, name: str | None = None, rows=None) -> None:
     """Corner pixels within :data:`PIXEL_MARGIN` image sizes of a ``width`` x ``height`` frame
-    (only the rows of ``rows`` and the corners flagged visible, when the table says)."""
+    (only the rows of ``rows`` and the corners flagged visible, when the table says).
+
+    Parameters
+    ----------
+    table : visland.contracts.Table
+        Labels or measurements (``*_u_px``, ``*_v_px`` columns, SPEC pixel convention).
+    width, height : int
+        The frame's size, pixels.
+    name : str, optional
+        How the file is named in the error (default its path).
+    rows : ndarray of bool, shape (n_rows,), optional
+        The rows to check (default all).
+    """
     label = name or str(table.path)
     for corner in ("near_left", "near_right", "far_left", "far_right"):
         for axis, side in (("u", width), ("v", height)):
@@ -180,7 +246,15 @@ def check_pixels(table, width: int, height: int, name: str | None = None, rows=N
 
 
 def check_camera(camera, name: str) -> None:
-    """Focal lengths against the image size, principal point inside the image, mounting."""
+    """Focal lengths against the image size, principal point inside the image, mounting.
+
+    Parameters
+    ----------
+    camera : visland.camera.CameraModel
+        The camera to check (image size, ``fx``, ``fy``, ``cx``, ``cy`` in pixels, mounting).
+    name : str
+        Its file, as named in the error.
+    """
     side = max(camera.width, camera.height)
     if side > MAX_IMAGE_SIDE_PX:
         raise ValueError(f"{name}: an image of {camera.width}x{camera.height} px, larger than the plausible "

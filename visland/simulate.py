@@ -31,7 +31,25 @@ METRIC_HEIGHTS_FT = (400.0, 200.0, 100.0)
 
 @dataclass(frozen=True)
 class SimulationOptions:
-    """What to simulate besides the scenario: camera, frame rate and imperfections."""
+    """What to simulate besides the scenario: camera, frame rate and imperfections.
+
+    Attributes
+    ----------
+    fps : float, default 25
+        Camera frame rate, Hz, in [1, 50] (the dynamics run at 50 Hz).
+    camera : visland.camera.CameraModel
+        The nominal camera (written to ``camera.json``; default the SPEC 2048 px camera).
+    pixel_noise_px : float, default 0
+        Standard deviation of the white noise on each corner coordinate, pixels, in [0, 50]
+        (thesis 5.2.2.1: 1 or 5 px).
+    calibration_error_deg : float or tuple of 3 floats, default 0
+        Camera mounting error, degrees: one angle added to roll, pitch and yaw, or
+        ``(roll, pitch, yaw)`` (thesis 5.2.2.2).
+    imu : visland.sensors.ImuParams
+        The inertial unit's imperfections (default: perfect).
+    seed : int, default 0
+        Seed of the pixel-noise generator.
+    """
 
     fps: float = 25.0
     camera: CameraModel = field(default_factory=CameraModel.default)
@@ -65,7 +83,25 @@ class SimulationOptions:
 
 @dataclass
 class SimulationResult:
-    """A flown scenario with everything the files hold."""
+    """A flown scenario with everything the files hold.
+
+    Attributes
+    ----------
+    scenario : visland.scenarios.Scenario
+        What was flown.
+    options : SimulationOptions
+        How it was simulated.
+    trajectory : visland.flight.Trajectory
+        The true flight at the dynamics rate.
+    imu : visland.sensors.InertialSeries
+        What the inertial unit reported (``telemetry.csv``).
+    frames : visland.flight.FrameStates
+        The true state at the camera frame times (``truth.csv``).
+    features : visland.features.IdealFeatures
+        Exact (or noisy) image features at the frame times (``labels.csv``).
+    camera_true : visland.camera.CameraModel
+        The camera as actually mounted (nominal plus calibration error).
+    """
 
     scenario: Scenario
     options: SimulationOptions
@@ -106,13 +142,40 @@ class SimulationResult:
 
 
 def frame_times(duration_s: float, fps: float) -> np.ndarray:
-    """Camera frame times ``k / fps`` inside ``[0, duration_s]``."""
+    """Camera frame times ``k / fps`` inside ``[0, duration_s]``.
+
+    Parameters
+    ----------
+    duration_s : float
+        Length of the flight, seconds.
+    fps : float
+        Frame rate, Hz.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Seconds from 0, the last at most ``duration_s`` (within 1e-9 s).
+    """
     n = int(math.floor(duration_s * fps + 1e-9)) + 1
     return np.arange(n) / fps
 
 
 def run_simulation(scenario: Scenario, options: SimulationOptions | None = None) -> SimulationResult:
-    """Fly ``scenario``, measure it with the IMU and compute the ideal image features."""
+    """Fly ``scenario``, measure it with the IMU and compute the ideal image features.
+
+    Parameters
+    ----------
+    scenario : visland.scenarios.Scenario
+        The approach to fly (:func:`visland.flight.simulate_flight`).
+    options : SimulationOptions, optional
+        Camera, frame rate and imperfections (default: SPEC camera, 25 Hz, none).
+
+    Returns
+    -------
+    SimulationResult
+        Pixels are formed through the true camera, features turned into dpsi and virtual
+        coordinates with the nominal camera and the IMU attitude.
+    """
     options = options or SimulationOptions()
     trajectory = simulate_flight(scenario)
     imu = measure_imu(trajectory, options.imu)
@@ -130,7 +193,18 @@ def run_simulation(scenario: Scenario, options: SimulationOptions | None = None)
 
 
 def write_simulation(result: SimulationResult, out_dir, force: bool = False) -> None:
-    """Write the SPEC files of ``result`` into ``out_dir`` (atomically as a whole folder)."""
+    """Write the SPEC files of ``result`` into ``out_dir`` (atomically as a whole folder).
+
+    Parameters
+    ----------
+    result : SimulationResult
+        What to write: telemetry.csv, truth.csv, labels.csv, camera.json, runway.json,
+        manifest.json.
+    out_dir : str or Path
+        The folder to create.
+    force : bool, default False
+        Replace an existing folder (refused otherwise).
+    """
     with staged_output_dir(out_dir, force=force) as staging:
         write_simulation_files(result, staging)
 
@@ -162,7 +236,18 @@ def simulation_manifest(result: SimulationResult) -> dict:
 
 
 def summary_lines(result: SimulationResult) -> list[str]:
-    """A one-screen summary: duration, deviations at 400/200/100 ft, limits, corner visibility."""
+    """A one-screen summary: duration, deviations at 400/200/100 ft, limits, corner visibility.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        A flown scenario.
+
+    Returns
+    -------
+    list of str
+        The lines ``visland simulate`` prints.
+    """
     tr = result.trajectory
     sc = result.scenario
     lines = [
