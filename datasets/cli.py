@@ -18,7 +18,8 @@ def _cmd_process(args) -> int:
                              telemetry=args.telemetry, frames_csv=args.frames_csv, fps=args.fps,
                              initial_height_m=args.initial_height, initial_error=args.initial_error,
                              init=args.init, report=not args.no_report, quiet=args.quiet, params_file=args.params,
-                             time_offset_s=args.time_offset, estimate_offset=args.estimate_offset)
+                             time_offset_s=args.time_offset, estimate_offset=args.estimate_offset,
+                             self_calibration=args.self_calibration)
     if len(args.input) > 1:
         for flag, value in (("--telemetry", args.telemetry), ("--camera", args.camera), ("--frames-csv", args.frames_csv)):
             if value:
@@ -178,6 +179,9 @@ def register(subparsers):
     p.add_argument("--params", default=None, metavar="FILE", help="observer parameters (TOML or JSON)")
     p.add_argument("--estimate-offset", action="store_true",
                    help="estimate the telemetry-to-frames clock offset from the horizon's roll in the frames")
+    p.add_argument("--self-calibration", action="store_true",
+                   help="apply the camera mounting's self-calibration from the runway (as 'estimate "
+                        "--self-calibration'); without it the estimate is computed and reported only")
     p.add_argument("--no-report", action="store_true", help="skip the HTML report")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--force", action="store_true", help="replace an existing output folder")

@@ -53,6 +53,7 @@ class ProcessOptions:
     params_file: str | None = None
     time_offset_s: float = 0.0        # added to the telemetry's times (visland.clocks)
     estimate_offset: bool = False
+    self_calibration: bool = False    # apply the mounting's self-calibration (estimate --self-calibration)
 
     def __post_init__(self):
         from visland.datasets.measure import parse_source
@@ -154,7 +155,8 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
     _check_agreement(source, options)
     estimate_options = EstimateOptions(observers=tuple(options.observers), measurements="(set below)",
                                        initial_height_m=options.initial_height_m,
-                                       initial_error=options.initial_error, params_file=options.params_file)
+                                       initial_error=options.initial_error, params_file=options.params_file,
+                                       self_calibration="apply" if options.self_calibration else "check")
     echo(f"{source.name}: {len(source)} frames of {source.camera.width}x{source.camera.height}, "
          f"{source.times_s[-1] - source.times_s[0]:.1f} s; measuring with {', '.join(out_dirs)}")
     if getattr(source, "timing", "").startswith("variable"):
@@ -223,10 +225,11 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
         read_measurements(staging / "measurements.csv")       # what we hand on reads back cleanly
         not_started: dict = {}
         diverged: dict = {}
+        calibration: dict = {}
         metrics = estimate_folder(staging, _with_measurements(estimate_options, staging / "measurements.csv"),
                                   staging / "estimates.csv",
                                   echo=lambda line: echo(line.replace(str(staging), str(out_dir))),
-                                  not_started=not_started, diverged=diverged)
+                                  not_started=not_started, diverged=diverged, calibration_out=calibration)
         deviations = _deviation_errors(source.truth, staging / "estimates.csv") if source.truth is not None else {}
         if metrics:
             doc = json.loads((staging / "metrics.json").read_text())
@@ -252,6 +255,9 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
             "no_estimates": not_started,
             # observers cut off when they diverged (estimates withheld from then on), and when
             "diverged": diverged,
+            # the camera mounting's error and the runway's slope estimated from the runway
+            # (visland.estimation.calibration), applied with --self-calibration, else reported only
+            "self_calibration": calibration.get("summary"),
             "throughput": {
                 "measure_wall_s": measurements.wall_s,
                 "analysis_s": measurements.analysis_s,
@@ -295,6 +301,17 @@ def _write_report(folder: Path, source, measurements, metrics, deviations, run) 
             else "no frame analysed")),
         ("observers", ", ".join(run["observers"])),
     ]
+    calibration = run.get("self_calibration")
+    if calibration:
+        e, g = calibration["mount_error_deg"], calibration["mount_error_sigma_deg"]
+        summary.append(("camera mounting (self-calibration)",
+                        f"error roll {e['roll']:+.3f} +- {g['roll']:.3f} deg, pitch {e['pitch']:+.3f} +- "
+                        f"{g['pitch']:.3f} deg, yaw {e['yaw']:+.3f} +- {g['yaw']:.3f} deg; runway slope "
+                        f"{calibration['slope_pct']:+.2f} +- {calibration['slope_sigma_pct']:.2f} %; "
+                        + ("applied to the measurements" if calibration["applied"]
+                           else "reported only (--self-calibration applies it)")))
+        if calibration.get("problem"):
+            summary.append(("CALIBRATION PROBLEM", calibration["problem"]))
     for observer, why in run.get("no_estimates", {}).items():
         summary.append((f"{observer}: no estimates", why))
     for observer, why in run.get("diverged", {}).items():

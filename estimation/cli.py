@@ -11,7 +11,7 @@ OBSERVER_HELP = ("two points: oj-2p ii-2p cccs-2p ccpi-hg-2p ccpi-hosm-2p cccj-2
                  "ccpi-2l cccj-2l ekf-2l; ECC'15: ecc-hg ecc-hosm; seed 004 (4D approach): dickmanns-4d; "
                  "or the groups 'points', 'lines', 'ecc', 'dickmanns', 'all'")
 STUDY_NAMES = ("table-5.3", "table-5.4", "table-5.6", "table-5.7", "table-5.8", "table-5.10", "table-5.12", "calibration",
-               "ecc", "academic", "dickmanns")
+               "robustness", "ecc", "academic", "dickmanns")
 
 
 def _expand_observers(names):
@@ -42,7 +42,8 @@ def _cmd_estimate(args) -> int:
     options = EstimateOptions(observers=_expand_observers(args.observer), measurements=args.measurements,
                               initial_height_m=args.initial_height, initial_error=args.initial_error,
                               aim_distance_m=args.aim_distance, params_file=args.params,
-                              self_calibration="apply" if args.self_calibration else "check")
+                              self_calibration="apply" if args.self_calibration else "check",
+                              time_offset_s=args.time_offset)
     estimate_folder(args.dir, options, args.out)
     return 0
 
@@ -106,6 +107,10 @@ def register(subparsers):
     p.add_argument("--params", default=None, metavar="FILE",
                    help="observer parameters, TOML or JSON, one table per observer name")
     p.add_argument("--force", action="store_true", help="replace an existing FILE (and metrics.json beside it)")
+    p.add_argument("--time-offset", type=float, default=0.0, metavar="S",
+                   help="seconds added to the telemetry's times to put them on the frames' clock, as for process; "
+                        "a camera whose frames are stamped S seconds after their exposure (a camera-to-IMU "
+                        "delay) is --time-offset S (default 0)")
     p.add_argument("--self-calibration", action="store_true",
                    help="correct the camera's mounting (pitch, roll, yaw) with its estimate from the runway itself "
                         "(vanishing point and threshold on the inertial horizon, epipolar constraint of the "

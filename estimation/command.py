@@ -17,7 +17,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -52,8 +52,12 @@ class EstimateOptions:
     aim_distance_m: float = DEFAULT_AIM_DISTANCE_M
     params_file: str | None = None
     self_calibration: str = "check"
+    time_offset_s: float = 0.0
 
     def __post_init__(self):
+        if not (isinstance(self.time_offset_s, (int, float)) and math.isfinite(self.time_offset_s)
+                and abs(self.time_offset_s) <= 60.0):
+            raise ValueError(f"--time-offset must be a number of seconds within +-60, got {self.time_offset_s!r}")
         if self.self_calibration not in ("off", "check", "apply"):
             raise ValueError(f"self_calibration must be 'off', 'check' or 'apply', got {self.self_calibration!r}")
         if not self.observers:
@@ -116,7 +120,7 @@ def _read_inputs(folder: Path, measurements: str):
 
 
 def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_started: dict | None = None,
-                    diverged: dict | None = None) -> dict:
+                    diverged: dict | None = None, calibration_out: dict | None = None) -> dict:
     """Run ``options.observers`` on ``folder``; write ``out_path`` (and metrics.json with truth).
 
     Returns the metrics per observer (empty without truth). An observer that cannot start
@@ -124,7 +128,9 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_
     cell empty and coasting = 1; why it did not start is echoed and, when ``not_started`` is a
     dict, stored there under its name. An observer that diverged (cut off by
     :func:`visland.estimation.runner.run_observer`) is echoed likewise and, when ``diverged`` is a
-    dict, its sentence stored there.
+    dict, its sentence stored there. The mounting's self-calibration (``options.self_calibration``
+    "check" or "apply") is echoed and, when ``calibration_out`` is a dict, its summary and sentence
+    stored there (``summary``, ``describe``).
     """
     from visland.contracts import ESTIMATE_COLUMNS, atomic_write_text, write_csv
     from visland.estimation.inputs import prepare_inputs
@@ -139,8 +145,15 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_
         raise ValueError(f"--out {out_path}: folder {out_path.parent} does not exist")
     params = load_observer_params(options.params_file) if options.params_file else {}
     camera, inertial, features, truth, meas_path = _read_inputs(folder, options.measurements)
+    if options.time_offset_s:
+        # onto the frames' clock (as process --time-offset): a frame stamped t was exposed when the
+        # telemetry stamped t - S was true, and the observers are corrected at that moment
+        inertial = replace(inertial, t_s=inertial.t_s + float(options.time_offset_s))
     prepared = prepare_inputs(inertial, features, camera, self_calibration=options.self_calibration)
     calibration = prepared.calibration
+    if calibration is not None and calibration_out is not None:
+        calibration_out["summary"] = json_ready(calibration.summary())
+        calibration_out["describe"] = calibration.describe()
     if calibration is not None:
         echo(calibration.describe() + ("" if calibration.applied or calibration.problem
                                         else " (reported only: --self-calibration applies it)"))

@@ -20,6 +20,9 @@ table-5.12      5 % velocity bias, two points (v_meas = 0.95 v; see VELOCITY_BIA
 calibration     issue 12: camera mount pitch/roll errors (+-0.5 deg) and runway slope (+-1 %), alone and
                 combined, 1 px noise, with the mounting's self-calibration applied
                 (visland.estimation.calibration); also its estimate 1 km out against the truth
+robustness      issue 12: one imperfection per row (noise 0-5 px, 5-50 Hz, mount pitch/roll +-1 deg,
+                slope +-1 %, camera delay 20-100 ms unannounced and announced, velocity bias +-5 %),
+                nine observers, three scenarios (visland.estimation.robustness)
 ecc             ECC'15: the three landings ecc-1..3 with 1 % measurement noise, ecc-hg and ecc-hosm
 academic        seed 001: the single-point observer on its academic example (eq. 14-16)
 dickmanns       seed 004: dickmanns-4d (with and without airspeed) beside ekf-2l and ccpi-hg-2p on the 8
@@ -150,6 +153,8 @@ STUDIES = {
                   ("p+0.5 r+0.5 s+1", (0.5, 0.5, 0.0), 1.0), ("p+0.5 r-0.5 s-1", (-0.5, 0.5, 0.0), -1.0),
                   ("p-0.5 r+0.5 s+1", (0.5, -0.5, 0.0), 1.0), ("p-0.5 r-0.5 s-1", (-0.5, -0.5, 0.0), -1.0))),
         kind="calibration"),
+    "robustness": StudySpec("robustness", "one imperfection at a time: noise, frame rate, mount, slope, delay, "
+                            "velocity bias", (), (), kind="robustness"),
     "ecc": StudySpec("ecc", "ECC'15: three landings, 1 % measurement noise", ("ecc-hg", "ecc-hosm"),
                      (Condition("1 % noise", relative_noise=0.01),), scenarios=ECC_SCENARIOS, kind="ecc"),
     "dickmanns": StudySpec("dickmanns", "seed 004: the 4D approach beside the thesis's observers, 1 px noise",
@@ -178,7 +183,8 @@ class Case:
     dy_true_m: np.ndarray
 
 
-def simulate_case(scenario_name: str, condition: Condition, seed: int = 0, heading: str = "dF") -> Case:
+def simulate_case(scenario_name: str, condition: Condition, seed: int = 0, heading: str = "dF",
+                  fps: float = 25.0) -> Case:
     """Fly ``scenario_name`` with the degradations of ``condition`` and prepare the inputs.
 
     ``heading="dF"`` (default) takes the heading deviation from the measured d_F as ``visland
@@ -190,7 +196,7 @@ def simulate_case(scenario_name: str, condition: Condition, seed: int = 0, headi
     from visland.scenarios import resolve_scenario
     from visland.sensors import ImuParams
     from visland.simulate import SimulationOptions, run_simulation
-    options = SimulationOptions(pixel_noise_px=condition.pixel_noise_px,
+    options = SimulationOptions(fps=fps, pixel_noise_px=condition.pixel_noise_px,
                                 calibration_error_deg=condition.calibration_error_deg,
                                 imu=ImuParams(velocity_bias_fraction=condition.velocity_bias_fraction, seed=seed),
                                 seed=seed)
@@ -284,6 +290,9 @@ def run_study(name: str, out_dir=None, seed: int = 0, heading: str = "dF", echo=
         figures = _ecc_study(spec, out, seed, echo, heading)
     elif spec.kind == "calibration":
         figures = _calibration_study(spec, seed, echo)
+    elif spec.kind == "robustness":
+        from visland.estimation.robustness import robustness_study
+        figures = robustness_study(out, seed, echo)
     elif spec.kind == "std-along":
         figures = _std_along_study(spec, out, seed, echo, heading)
     else:
