@@ -107,10 +107,8 @@ def register(subparsers):
     p.add_argument("--params", default=None, metavar="FILE",
                    help="observer parameters, TOML or JSON, one table per observer name")
     p.add_argument("--force", action="store_true", help="replace an existing FILE (and metrics.json beside it)")
-    p.add_argument("--time-offset", type=float, default=0.0, metavar="S",
-                   help="seconds added to the telemetry's times to put them on the frames' clock, as for process; "
-                        "a camera whose frames are stamped S seconds after their exposure (a camera-to-IMU "
-                        "delay) is --time-offset S (default 0)")
+    from visland.cli import TIME_OFFSET_HELP
+    p.add_argument("--time-offset", type=float, default=0.0, metavar="S", help=TIME_OFFSET_HELP)
     p.add_argument("--self-calibration", action="store_true",
                    help="correct the camera's mounting (pitch, roll, yaw) with its estimate from the runway itself "
                         "(vanishing point and threshold on the inertial horizon, epipolar constraint of the "

@@ -83,6 +83,11 @@ def add_simulation_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="replace an existing output folder")
 
 
+#: ``--time-offset``'s help, shared by detect, track, process and estimate.
+TIME_OFFSET_HELP = ("seconds added to the telemetry's times to put them on the frames' clock; a camera whose frames "
+                    "are stamped S seconds after their exposure (a camera-to-IMU delay) is --time-offset S (default 0)")
+
+
 def add_frame_source_arguments(parser: argparse.ArgumentParser, telemetry_note: str = "") -> None:
     """Where a recording's files are when not in its folder: the options of ``detect``, ``track``
     and ``process``, declared once here so that they read and behave alike.
@@ -106,8 +111,7 @@ def add_frame_source_arguments(parser: argparse.ArgumentParser, telemetry_note: 
                         help="frame,t_s times to use instead of the folder's frames.csv (without either: --fps)")
     parser.add_argument("--fps", type=float, default=None,
                         help="frame rate in Hz when there is no frames.csv (default 25, or the video's own)")
-    parser.add_argument("--time-offset", type=float, default=0.0, metavar="S",
-                        help="seconds added to the telemetry's times to put them on the frames' clock (default 0)")
+    parser.add_argument("--time-offset", type=float, default=0.0, metavar="S", help=TIME_OFFSET_HELP)
 
 
 def scenario_from_args(args):

@@ -49,3 +49,13 @@ def test_initial_guess_options_are_the_same_in_estimate_and_process(option, defa
     estimate, process = (_options(_subparser(command))[option] for command in ("estimate", "process"))
     assert estimate.default == process.default == default
     assert estimate.help == process.help
+
+
+def test_estimate_takes_the_time_offset_as_process_does():
+    estimate, process = (_options(_subparser(command))["--time-offset"] for command in ("estimate", "process"))
+    assert (estimate.dest, estimate.default, estimate.type, estimate.metavar, estimate.help) == \
+           (process.dest, process.default, process.type, process.metavar, process.help)
+    assert "delay" in estimate.help
+    from visland.estimation.command import EstimateOptions
+    with pytest.raises(ValueError, match="--time-offset"):
+        EstimateOptions(observers=("kf-2p",), time_offset_s=float("nan"))
