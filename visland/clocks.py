@@ -35,7 +35,19 @@ MAX_SIGMA_S = 0.05
 
 @dataclass(frozen=True)
 class TimeOffset:
-    """The estimated offset: ``offset_s`` (added to telemetry times) and its one-sigma ``sigma_s``."""
+    """The estimated offset of the telemetry's clock against the frames'.
+
+    Attributes
+    ----------
+    offset_s : float
+        Seconds to add to the telemetry's times (``--time-offset``).
+    sigma_s : float
+        One-sigma uncertainty, seconds (widened by the residuals' frame-to-frame correlation).
+    frames_used : int
+        Frames whose horizon gave a roll.
+    residual_deg : float
+        RMS roll difference between the frames and the shifted telemetry, degrees.
+    """
 
     offset_s: float
     sigma_s: float
@@ -46,8 +58,23 @@ class TimeOffset:
 def estimate_time_offset(source, max_offset_s: float = MAX_OFFSET_S) -> TimeOffset:
     """Estimate the telemetry-to-frames clock offset of a :class:`visland.datasets.sources.FrameSource`.
 
-    Raises ``ValueError`` (one sentence) when the frames show too little roll motion, or too
-    few horizons, for the offset to be known within :data:`MAX_SIGMA_S`.
+    Parameters
+    ----------
+    source : visland.datasets.sources.FrameSource
+        Frames with their times, camera and telemetry (its ``roll_deg`` is compared with the
+        roll of the horizon seen in up to :data:`MAX_FRAMES` frames).
+    max_offset_s : float, default MAX_OFFSET_S
+        Largest offset searched, seconds, either way.
+
+    Returns
+    -------
+    TimeOffset
+
+    Raises
+    ------
+    ValueError
+        One sentence when the frames show too little roll motion, or too few horizons, for the
+        offset to be known within :data:`MAX_SIGMA_S`.
     """
     from visland.detection.attitude import attitude_from_horizon, visible_horizon
     from visland.folder import ignored_pixels, scene_frame

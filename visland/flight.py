@@ -65,7 +65,19 @@ FLIGHT_LIMITS = {
 
 @dataclass(frozen=True)
 class AircraftParams:
-    """Stabilised aircraft (thesis hypothesis 7) and its flight-control limits."""
+    """Stabilised aircraft (thesis hypothesis 7) and its flight-control limits.
+
+    Attributes
+    ----------
+    nz_omega_rad_s, nz_damping : float
+        Natural frequency (rad/s) and damping of the load factor's second-order response.
+    roll_time_constant_s : float
+        Time constant of the bank's first-order response, seconds.
+    roll_rate_limit_dps : float
+        Bank-rate limit, deg/s (keeps the Euler roll rate under thesis 1.3.2's 12 deg/s).
+    alpha_1g_deg, alpha_zero_lift_deg : float
+        Angle of attack at 1 g and at zero lift, degrees (alpha linear in the load factor).
+    """
 
     nz_omega_rad_s: float = 1.25
     nz_damping: float = 0.7
@@ -83,7 +95,25 @@ class AircraftParams:
 
 @dataclass(frozen=True)
 class GuidanceParams:
-    """Landing guidance gains and autopilot limits (see module docstring)."""
+    """Landing guidance gains and autopilot limits (see module docstring).
+
+    Attributes
+    ----------
+    glide_slope_deg : float
+        Glide path angle, degrees.
+    intercept_angle_deg : float
+        Largest localizer intercept angle ``chi_int``, degrees.
+    k_y_per_s, k_v_per_s : float
+        Lateral position and lateral speed gains, 1/s.
+    bank_limit_deg : float
+        Autopilot bank limit, degrees.
+    k_h_per_s, k_gamma_per_s, k_alt_per_s : float
+        Glide-path, flight-path and altitude-hold gains, 1/s.
+    gamma_min_deg, gamma_max_deg : float
+        Limits of the flight-path order, degrees.
+    nz_min_g, nz_max_g : float
+        Limits of the load-factor order, g.
+    """
 
     glide_slope_deg: float = 3.0
     intercept_angle_deg: float = 22.0  # steeper intercepts swing the runway out of the 45 deg field of view
@@ -132,6 +162,10 @@ class Trajectory:
 
     Attributes
     ----------
+    scenario : Scenario
+        What was flown.
+    rate_hz : float
+        Sampling (and integration) rate, Hz.
     t_s : (n,) time from the start of the vision-based approach.
     p_ned_m, p_runway_m : (n, 3) position in N and R (origin at the threshold centre).
     v_ned_mps, v_runway_mps : (n, 3) ground velocity.
@@ -139,8 +173,11 @@ class Trajectory:
     dpsi_rad : (n,) heading deviation ``heading - runway heading`` wrapped to [-pi, pi).
     omega_body_rps : (n, 3) body angular rates (p, q, r).
     gamma_rad, chi_rad, nz_g, alpha_rad : (n,) flight path, air-track heading, load factor, AoA.
+    roll_rate_rps : (n,) Euler roll rate, rad/s (checked against thesis 1.3.2's 12 deg/s).
     bank_cmd_rad, nz_cmd_g : (n,) guidance orders at each sample.
     wind_ned_mps : (n, 3) wind velocity.
+    end_reason : str
+        Why the run ended (the threshold crossed, or the time limit).
     """
 
     scenario: Scenario
@@ -257,7 +294,23 @@ class Trajectory:
 
 @dataclass
 class FrameStates:
-    """Aircraft states at camera frame times (see :meth:`Trajectory.at`)."""
+    """Aircraft states at camera frame times (see :meth:`Trajectory.at`), truth in SI units.
+
+    Attributes
+    ----------
+    t_s : ndarray, shape (n,)
+        Frame times, seconds.
+    p_runway_m : ndarray, shape (n, 3)
+        Camera (centre of gravity) position in the runway frame R, metres.
+    v_ned_mps, v_runway_mps : ndarray, shape (n, 3)
+        Ground velocity in NED and in R, m/s.
+    roll_rad, pitch_rad, heading_rad : ndarray, shape (n,)
+        ZYX Euler angles of the body from NED, radians.
+    dpsi_rad : ndarray, shape (n,)
+        Heading minus runway heading, radians, in [-pi, pi).
+    omega_body_rps : ndarray, shape (n, 3)
+        Body rates (p, q, r), rad/s.
+    """
 
     t_s: np.ndarray
     p_runway_m: np.ndarray
@@ -348,6 +401,23 @@ def simulate_flight(scenario: Scenario, aircraft: AircraftParams | None = None,
     guidance orders evaluated at every stage (so attitude rates are continuous and the
     recorded body rates are the derivative of the attitude flown), and returns the sampled
     :class:`Trajectory`.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Initial conditions, runway and wind.
+    aircraft : AircraftParams, optional
+        The aircraft's responses and limits (default values of the module docstring).
+    guidance : GuidanceParams, optional
+        The ILS laws' gains and limits.
+    rate_hz : float, default 50
+        Integration and sampling rate, Hz, in [10, 1000].
+    max_duration_s : float, default 400
+        The run stops here if the threshold has not been crossed, seconds.
+
+    Returns
+    -------
+    Trajectory
     """
     aircraft = aircraft or AircraftParams()
     guidance_params = guidance or GuidanceParams()
@@ -518,6 +588,19 @@ class FlareParams:
 
     Main gear: ``gear_body_m`` from the centre of gravity in body axes (x forward, z down); the
     aircraft touches down when the gear reaches the runway surface.
+
+    Attributes
+    ----------
+    flare_height_m : float
+        Main-gear height ``h_f`` where the flare starts, metres.
+    touchdown_sink_mps : float
+        Sink rate ``s_td`` the flare tends to, m/s.
+    k_hdot_per_s : float
+        Gain of the vertical-speed loop, 1/s.
+    gear_body_m : tuple of 3 floats
+        Main gear position from the centre of gravity, body axes, metres.
+    go_around_gamma_deg : float
+        Climb angle of a go-around, degrees.
     """
 
     flare_height_m: float = 15.0
@@ -543,7 +626,27 @@ class FlareParams:
 
 @dataclass
 class AircraftState:
-    """What the aircraft is doing now (truth, SI): the camera sits at the centre of gravity."""
+    """What the aircraft is doing now (truth, SI): the camera sits at the centre of gravity.
+
+    Attributes
+    ----------
+    t_s : float
+        Time, seconds.
+    p_runway_m : ndarray, shape (3,)
+        Position in the runway frame R, metres.
+    v_runway_mps, v_ned_mps : ndarray, shape (3,)
+        Ground velocity in R and in NED, m/s.
+    roll_rad, pitch_rad, heading_rad : float
+        ZYX Euler angles of the body from NED, radians.
+    dpsi_rad : float
+        Heading minus runway heading, radians.
+    omega_body_rps : ndarray, shape (3,)
+        Body rates (p, q, r), rad/s.
+    gamma_rad, mu_rad : float
+        Flight-path angle and bank, radians.
+    nz_g : float
+        Load factor, g.
+    """
 
     t_s: float
     p_runway_m: np.ndarray
@@ -575,6 +678,19 @@ class FlightModel:
     position and velocity; ``flare_orders(...)`` and ``go_around_orders()`` the flare's and a
     go-around's; ``step(bank_cmd_rad, nz_cmd_g)`` integrates (RK4) and reports a main-gear
     touchdown inside the step (``touchdown``: time, gear position in R, sink rate).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Initial conditions, runway and wind.
+    aircraft : AircraftParams, optional
+        Responses and limits (default :class:`AircraftParams`).
+    guidance : GuidanceParams, optional
+        Gains of the ILS laws.
+    flare : FlareParams, optional
+        The flare law and main gear.
+    rate_hz : float, default 50
+        Step rate, Hz.
     """
 
     def __init__(self, scenario: Scenario, aircraft: AircraftParams | None = None,

@@ -41,7 +41,20 @@ class FootageFrame:
 
 
 def evenly_spaced(count: int, wanted: int) -> list[int]:
-    """``min(count, wanted)`` indices in ``0..count-1`` spread evenly, first and last included."""
+    """``min(count, wanted)`` indices in ``0..count-1`` spread evenly, first and last included.
+
+    Parameters
+    ----------
+    count : int
+        How many frames there are.
+    wanted : int
+        How many to pick.
+
+    Returns
+    -------
+    list of int
+        Sorted, without repeats (empty when either number is not positive).
+    """
     if count <= 0 or wanted <= 0:
         return []
     if wanted >= count:

@@ -105,7 +105,22 @@ class ChessboardCalibration:
 
 
 def parse_board(text: str) -> tuple[int, int]:
-    """``"9x6"`` to ``(9, 6)``: the board's inner corners (squares minus one) along each side."""
+    """``"9x6"`` to ``(9, 6)``: the board's inner corners (squares minus one) along each side.
+
+    Parameters
+    ----------
+    text : str
+        ``COLSxROWS`` (``*`` accepted for ``x``), at least 3 each, not square.
+
+    Returns
+    -------
+    cols, rows : int
+
+    Raises
+    ------
+    ValueError
+        Naming ``--board`` and what is wrong.
+    """
     parts = text.lower().replace("*", "x").split("x")
     try:
         cols, rows = (int(p) for p in parts)
@@ -322,9 +337,20 @@ def edge_pieces(grey: np.ndarray, min_length_px: float, tolerance_px: float, ign
 
 
 def undistort_radial_k1(xy_distorted: np.ndarray, k1: float) -> np.ndarray:
-    """Inverse of ``x_d = x (1 + k1 r^2)`` on normalised coordinates ``(..., 2)`` (Newton on r).
+    """Inverse of ``x_d = x (1 + k1 r^2)`` on normalised coordinates (Newton on r, 20 steps).
 
-    NaN where there is no inverse (beyond the fold of a strong barrel lens).
+    Parameters
+    ----------
+    xy_distorted : array_like, shape (..., 2)
+        Distorted normalised coordinates ``((u - cx)/fx, (v - cy)/fy)``.
+    k1 : float
+        First radial coefficient (negative: barrel).
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        Undistorted normalised coordinates; NaN where there is no inverse (beyond the fold of a
+        strong barrel lens).
     """
     xy_distorted = np.asarray(xy_distorted, dtype=float)
     r_d = np.hypot(xy_distorted[..., 0], xy_distorted[..., 1])

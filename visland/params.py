@@ -28,7 +28,22 @@ __all__ = ["ParamsFile", "toml_value"]
 
 
 def toml_value(value) -> str:
-    """A scalar or a list as a TOML value."""
+    """A scalar or a list as a TOML value.
+
+    Parameters
+    ----------
+    value : bool, int, float, str, or list or tuple of them
+        What to write (strings quoted as JSON strings, which TOML reads alike).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ValueError
+        Any other type.
+    """
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, (int, float)):

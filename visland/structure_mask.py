@@ -161,6 +161,16 @@ def exposure_gains(frames) -> np.ndarray:
     the median image (the ratio of near-black pixels is noise). The moving scene's ratios scatter
     around 1, the static parts' ratios are the gain itself: the median follows the camera's
     automatic exposure as long as the scene does not change its overall brightness.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray, shape (H, W)
+        Grey frames of one camera, any numeric dtype.
+
+    Returns
+    -------
+    ndarray, shape (n_frames,)
+        Gains, 1 for a frame exposed like the median (all ones when too few pixels are lit).
     """
     import cv2  # heavy import kept local: the core must start fast
     small = np.stack([cv2.resize(np.asarray(f, np.float32), None, fx=0.25, fy=0.25, interpolation=cv2.INTER_AREA)

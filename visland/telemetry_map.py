@@ -85,9 +85,26 @@ def _entries(map_path: Path) -> dict:
 
 
 def convert_telemetry(csv_path, map_path, out_path) -> int:
-    """Write ``out_path`` (SPEC telemetry.csv) from ``csv_path`` through the column map; return
-    the number of rows. A column the map names that the file lacks, or a cell that is not a
-    number, is one sentence naming the column, line and file."""
+    """Write ``out_path`` (SPEC telemetry.csv) from ``csv_path`` through the column map.
+
+    A column the map names that the file lacks, or a cell that is not a number, is one
+    sentence naming the column, line and file.
+
+    Parameters
+    ----------
+    csv_path : str or Path
+        The telemetry as recorded (other column names and units).
+    map_path : str or Path
+        The TOML column map: ``[columns] spec = { column, unit, sign }`` (README, "Telemetry as
+        people have it").
+    out_path : str or Path
+        The SPEC ``telemetry.csv`` to write (atomically).
+
+    Returns
+    -------
+    int
+        The number of rows written.
+    """
     csv_path = check_input_file(csv_path, "telemetry file")
     entries = _entries(Path(check_input_file(map_path, "telemetry column map")))
     with csv_path.open(newline="", encoding="utf-8-sig") as handle:

@@ -25,7 +25,19 @@ __all__ = ["read_json_object", "read_toml_object", "read_document_text", "check_
 
 
 def read_document_text(path, what: str = "file") -> str:
-    """The text of ``path`` (UTF-8, a leading byte-order mark dropped); one sentence on failure."""
+    """The text of ``path`` (UTF-8, a leading byte-order mark dropped); one sentence on failure.
+
+    Parameters
+    ----------
+    path : str or Path
+        The user's file.
+    what : str, default "file"
+        What the file is, in the error ("scenario file", "camera.json"...).
+
+    Returns
+    -------
+    str
+    """
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -44,7 +56,19 @@ def read_document_text(path, what: str = "file") -> str:
 
 
 def read_json_object(path, what: str = "JSON file") -> dict:
-    """A JSON document whose top level is an object, as a dict."""
+    """A JSON document whose top level is an object, as a dict.
+
+    Parameters
+    ----------
+    path : str or Path
+        The JSON file.
+    what : str, default "JSON file"
+        Its role, named when it is missing, unreadable or not an object.
+
+    Returns
+    -------
+    dict
+    """
     path = Path(path)
     text = read_document_text(path, what)
     try:
@@ -59,7 +83,20 @@ def read_json_object(path, what: str = "JSON file") -> dict:
 
 
 def read_toml_object(path, what: str = "TOML file") -> dict:
-    """A TOML document as a dict."""
+    """A TOML document as a dict.
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML file (parameters, scenario, column map).
+    what : str, default "TOML file"
+        Its role in the error sentence.
+
+    Returns
+    -------
+    dict
+        The document's tables as nested dicts.
+    """
     path = Path(path)
     text = read_document_text(path, what)
     try:
@@ -71,7 +108,21 @@ def read_toml_object(path, what: str = "TOML file") -> dict:
 
 
 def check_input_file(path, what: str = "file", option: str | None = None) -> Path:
-    """``path`` as a Path, after checking it is an existing regular file that can be read."""
+    """``path`` as a Path, after checking it is an existing regular file that can be read.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file a command was given.
+    what : str, default "file"
+        Its role, in the error.
+    option : str, optional
+        The command-line option that named it (``--camera``...), put before the path in errors.
+
+    Returns
+    -------
+    Path
+    """
     path = Path(path)
     named = f"{option} {path}" if option else str(path)
     if not path.exists():
@@ -88,7 +139,22 @@ def check_input_file(path, what: str = "file", option: str | None = None) -> Pat
 
 
 def check_input_folder(path, what: str = "input folder", option: str | None = None) -> Path:
-    """``path`` as a Path, after checking it is an existing folder that can be listed."""
+    """``path`` as a Path, after checking it is an existing folder that can be listed.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder a command reads.
+    what : str, default "input folder"
+        Its role, in the error.
+    option : str, optional
+        The option that named it, if any.
+
+    Returns
+    -------
+    Path
+        The folder, readable and listable.
+    """
     path = Path(path)
     named = f"{option} {path}" if option else str(path)
     if not path.exists():
@@ -122,7 +188,23 @@ def _check_parent(path: Path, named: str) -> None:
 
 def check_output_file(path, force: bool = False, what: str = "output file", option: str = "--out") -> Path:
     """``path`` as a Path, after checking a file can be written there: not a folder, not
-    existing unless ``force``, its folder exists (or can be made) and is writable."""
+    existing unless ``force``, its folder exists (or can be made) and is writable.
+
+    Parameters
+    ----------
+    path : str or Path
+        Where the command will write.
+    force : bool, default False
+        Whether an existing file may be replaced.
+    what : str, default "output file"
+        The file's role, in the error.
+    option : str, default "--out"
+        The option that named it.
+
+    Returns
+    -------
+    Path
+    """
     path = Path(path)
     named = f"{option} {path}"
     if path.is_dir():
@@ -135,7 +217,23 @@ def check_output_file(path, force: bool = False, what: str = "output file", opti
 
 def check_output_folder(path, force: bool = False, what: str = "output folder", option: str = "--out") -> Path:
     """``path`` as a Path, after checking a folder can be made there: not existing unless
-    ``force`` (and then a folder), its parent exists (or can be made) and is writable."""
+    ``force`` (and then a folder), its parent exists (or can be made) and is writable.
+
+    Parameters
+    ----------
+    path : str or Path
+        The folder the command will create.
+    force : bool, default False
+        Whether an existing folder may be replaced.
+    what : str, default "output folder"
+        Named in the error.
+    option : str, default "--out"
+        The option that gave the path.
+
+    Returns
+    -------
+    Path
+    """
     path = Path(path)
     named = f"{option} {path}"
     if path.exists() or path.is_symlink():

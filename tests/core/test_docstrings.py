@@ -20,9 +20,11 @@ CLI_MODULES = ("visland.cli", "visland.footage_cli", "visland.render.cli", "visl
                "visland.datasets.generate_cli")
 
 #: Modules whose every public function and class documents its parameters.
-DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.contracts", "visland.features", "visland.folder",
-                      "visland.frames", "visland.limits", "visland.simulate",
-                      "visland.progress", "visland.runway", "visland.scenarios", "visland.sensors",
+DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.clocks", "visland.contracts", "visland.features",
+                      "visland.flight", "visland.folder", "visland.footage", "visland.frames", "visland.lens",
+                      "visland.limits", "visland.params", "visland.progress", "visland.runway", "visland.scenarios",
+                      "visland.sensors", "visland.simulate", "visland.structure_mask", "visland.telemetry_map",
+                      "visland.userfiles",
                       "visland.render.params", "visland.tracking.anchoring", "visland.tracking.motion",
                       "visland.tracking.params", "visland.tracking.run", "visland.tracking.tracker")
 
