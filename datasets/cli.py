@@ -19,7 +19,8 @@ def _cmd_process(args) -> int:
                              initial_height_m=args.initial_height, initial_error=args.initial_error,
                              init=args.init, report=not args.no_report, quiet=args.quiet, params_file=args.params,
                              time_offset_s=args.time_offset, estimate_offset=args.estimate_offset,
-                             self_calibration=args.self_calibration)
+                             self_calibration=args.self_calibration,
+                             windows=args.windows)
     if len(args.input) > 1:
         for flag, value in (("--telemetry", args.telemetry), ("--camera", args.camera), ("--frames-csv", args.frames_csv)):
             if value:
@@ -176,6 +177,9 @@ def register(subparsers):
     p.add_argument("--init", metavar="labels|'u,v;u,v'", default=None,
                    help="tracking designation of the threshold corners (default: labels when present)")
     add_initial_guess_arguments(p)
+    p.add_argument("--windows", choices=("detector", "dickmanns-4d"), default="detector",
+                   help="detection's search windows: placed by the detector's last detection (default) or by "
+                        "dickmanns-4d's prediction of each frame (seed 004; the filter runs beside the detector)")
     p.add_argument("--params", default=None, metavar="FILE", help="observer parameters (TOML or JSON)")
     p.add_argument("--estimate-offset", action="store_true",
                    help="estimate the telemetry-to-frames clock offset from the horizon's roll in the frames")

@@ -92,7 +92,9 @@ def _measure_ideal(source) -> Measurements:
     return Measurements("ideal", rows.columns())
 
 
-def _measure_detection(source, params, quiet) -> Measurements:
+def _measure_detection(source, params, quiet, windows=None) -> Measurements:
+    """``windows``: None (the detector's own search windows) or a
+    :class:`visland.datasets.filter_windows.FilterWindows` that places them (its time counts as analysis)."""
     from visland.detection import DetectionSequence
     sequence = DetectionSequence(source.camera, params)
     rows = _Rows("detection")
@@ -107,10 +109,13 @@ def _measure_detection(source, params, quiet) -> Measurements:
                 flagged.append((index, reason))
             else:
                 tic = time.perf_counter()
+                predicted = windows.window(index) if windows is not None else None
                 result = sequence(image, float(source.inertial.roll_rad[index]),
-                                  float(source.inertial.pitch_rad[index]), t)
+                                  float(source.inertial.pitch_rad[index]), t, predicted=predicted)
                 analysis += time.perf_counter() - tic
                 rows.add(index, t, result.to_measurement_row(), result.found, result.reason, result.confidence)
+            if windows is not None:
+                windows.add(rows.rows[-1])
             bar.update()
     return Measurements("detection", rows.columns(), flagged, analysis, time.perf_counter() - start)
 
@@ -126,15 +131,18 @@ def _measure_tracking(source, kind, init, quiet) -> Measurements:
     return Measurements(kind, result.columns, result.flagged, result.analysis_s, time.perf_counter() - start)
 
 
-def measure(source, kind: str = "detection", detector_params=None, init=None, quiet: bool = False) -> Measurements:
-    """Measure every frame of ``source`` with ``kind`` (one of :data:`SOURCES`)."""
+def measure(source, kind: str = "detection", detector_params=None, init=None, quiet: bool = False,
+            windows=None) -> Measurements:
+    """Measure every frame of ``source`` with ``kind`` (one of :data:`SOURCES`); ``windows`` (detection
+    only): a callable ``windows(source)`` giving what places the search windows (see
+    :func:`_measure_detection`), or None."""
     base, _ = parse_source(kind)
     if base == "ideal":
         return _measure_ideal(source)
     if source.inertial is None:
         raise ValueError(f"{source.name}: telemetry is needed to analyse frames (roll and pitch fix the horizon)")
     if base == "detection":
-        return _measure_detection(source, detector_params, quiet)
+        return _measure_detection(source, detector_params, quiet, windows(source) if windows else None)
     return _measure_tracking(source, kind, init, quiet)
 
 
@@ -159,7 +167,7 @@ class _TeeSource:
             yield (index, grey if grey is not None else as_grey(colour), reason) if gray else (index, colour, reason)
 
 
-def measure_many(source, kinds, init=None, quiet: bool = False) -> dict:
+def measure_many(source, kinds, init=None, quiet: bool = False, windows=None) -> dict:
     """Measure ``source`` with several ``kinds`` while decoding each frame once.
 
     One thread decodes; each kind consumes the frames in its own thread (OpenCV releases the
@@ -168,7 +176,7 @@ def measure_many(source, kinds, init=None, quiet: bool = False) -> dict:
     """
     kinds = list(dict.fromkeys(kinds))
     if len(kinds) == 1 or all(kind == "ideal" for kind in kinds):
-        return {kind: measure(source, kind, init=init, quiet=quiet) for kind in kinds}
+        return {kind: measure(source, kind, init=init, quiet=quiet, windows=windows) for kind in kinds}
     for kind in kinds:
         parse_source(kind)
     imaging = [k for k in kinds if k != "ideal"]
@@ -179,7 +187,7 @@ def measure_many(source, kinds, init=None, quiet: bool = False) -> dict:
     def consume(kind):
         try:
             results[kind] = measure(_TeeSource(source, queues[kind]), kind, init=init,
-                                    quiet=quiet or kind != imaging[0])
+                                    quiet=quiet or kind != imaging[0], windows=windows)
         except BaseException as error:          # re-raised in the caller after the decoder stops
             errors[kind] = error
             while queues[kind].get() is not None:   # keep draining so the decoder never blocks

@@ -54,6 +54,7 @@ class ProcessOptions:
     time_offset_s: float = 0.0        # added to the telemetry's times (visland.clocks)
     estimate_offset: bool = False
     self_calibration: bool = False    # apply the mounting's self-calibration (estimate --self-calibration)
+    windows: str = "detector"         # who places detection's search windows (visland.datasets.filter_windows)
 
     def __post_init__(self):
         from visland.datasets.measure import parse_source
@@ -65,6 +66,9 @@ class ProcessOptions:
             raise ValueError(f"--fps must be a frame rate in {FPS_LIMIT.low:g}..{FPS_LIMIT.high:g} Hz, got {self.fps!r}")
         from visland.estimation.command import check_initial_guess
         check_initial_guess(self.initial_height_m, self.initial_error)
+        from visland.datasets.filter_windows import WINDOW_SOURCES
+        if self.windows not in WINDOW_SOURCES:
+            raise ValueError(f"--windows must be one of {', '.join(WINDOW_SOURCES)}, got {self.windows!r}")
         if not (math.isfinite(self.time_offset_s) and abs(self.time_offset_s) <= 60.0):
             raise ValueError(f"--time-offset must be a number of seconds within +-60, got {self.time_offset_s!r}")
 
@@ -161,12 +165,27 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
          f"{source.times_s[-1] - source.times_s[0]:.1f} s; measuring with {', '.join(out_dirs)}")
     if getattr(source, "timing", "").startswith("variable"):
         echo(f"{source.name}: {source.timing}")
-    measured = measure_many(source, list(out_dirs), init=options.init, quiet=options.quiet)
+    measured = measure_many(source, list(out_dirs), init=options.init, quiet=options.quiet,
+                            windows=_filter_windows(options) if options.windows == "dickmanns-4d" else None)
     runs = {}
     for kind, out_dir in out_dirs.items():
         runs[kind] = _write_run(source, measured[kind], replace(options, source=kind), estimate_options,
                                 input_path, out_dir, force, started, echo)
     return runs
+
+
+def _filter_windows(options: ProcessOptions):
+    """``windows(source)`` for :func:`visland.datasets.measure.measure`: dickmanns-4d placing the
+    detector's search windows, started with the same height guess as the observers."""
+    from visland.datasets.filter_windows import FilterWindows
+
+    def make(source):
+        def dh0_of_frame(k):
+            if options.initial_height_m is not None:
+                return options.initial_height_m
+            return (1.0 + options.initial_error) * float(source.truth["dh_m"][k])
+        return FilterWindows(source, dh0_of_frame, "apply" if options.self_calibration else "off")
+    return make
 
 
 def _check_paths(input_path, out_dirs: dict, options: ProcessOptions, force: bool) -> None:
