@@ -90,7 +90,8 @@ class KFParams(PointsParams):
 
 
 class KF2P(_PointsObserver):
-    """Kalman filter with pseudo-measurements on P' and P'' (thesis annex 5.4-5.6), via filterpy."""
+    """Kalman filter with pseudo-measurements on P' and P'' (thesis annex 5.4-5.6); filterpy's
+    KalmanFilter holds the state and covariance, its predict and update are written out here."""
 
     substep_correction = False          # one Kalman update per measurement
     name = "kf-2p"
@@ -115,6 +116,7 @@ class KF2P(_PointsObserver):
         self._H[1, 1] = self._H[3, 2] = -1.0
         self._R = np.zeros((4, 4))
         self._z = np.zeros(4)
+        self._eye = np.eye(4)
         v = first.v_runway_mps
         self._v = (float(v[0]), float(v[1]), float(v[2]))
         self._t_corrected = float(first.t_s)
@@ -126,7 +128,7 @@ class KF2P(_PointsObserver):
         # displacement in the runway frame and B = -[[1,0,0], [0,1,0], [0,1,0], [0,0,1]] (both
         # corners share the threshold's x and z), Q = (velocity_sigma_mps dt)^2 I, written out
         # here rather than through filterpy's predict (four 4x4 products at every 50 Hz step);
-        # the update below is filterpy's
+        # the update (_correct) is filterpy's written out likewise, with the Huber weight
         kf = self._kf
         x = kf.x
         x[0] -= d1
@@ -162,17 +164,30 @@ class KF2P(_PointsObserver):
         R = self._R
         R[0, 0] = R[2, 2] = z_hat * z_hat * var1
         R[1, 1] = R[3, 3] = z_hat * z_hat * var2
+        # the update of filterpy's KalmanFilter.update written out (it would recompute S, and its
+        # allocations cost a fifth of the step): innovation y = z - H x, S = H P H' + R,
+        # K = P H' S^-1, x += K y, Joseph-form P = (I - K H) P (I - K H)' + K R K'
+        P = kf.P
+        innovation = z - H @ x
+        PHt = P @ H.T
+        S = H @ PHt + R
+        S_inv = np.linalg.inv(S)
         c = p.huber_threshold
         if c > 0.0:
             # Huber-weighted update (module docstring, "Robust update"): an innovation beyond c
             # standard deviations is given the weight c / d, i.e. R scaled by d / c
-            innovation = z - H @ x
-            S = H @ kf.P @ H.T + R
-            d = math.sqrt(max(float(innovation @ np.linalg.solve(S, innovation)), 0.0))
+            d = math.sqrt(max(float(innovation @ S_inv @ innovation), 0.0))
             self.last_normalised_innovation = d
             if d > c:
                 R = R * (d / c)
-        kf.update(z, R=R, H=H)                # innovation z - H x, K = P H' S^-1, Joseph-form covariance
+                S = H @ PHt + R
+                S_inv = np.linalg.inv(S)
+        K = PHt @ S_inv
+        kf.x = x + K @ innovation
+        I_KH = self._eye - K @ H
+        kf.P = I_KH @ P @ I_KH.T + K @ R @ K.T
+        kf.y = innovation
+        kf.S = S
         self._sync_outputs()
 
     def _sync_outputs(self) -> None:
