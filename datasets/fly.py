@@ -46,12 +46,21 @@ class MonitorParams:
 
     At each decision height (true height, the radio altimeter's call-out), in this order: the
     detection over the last ``window_s`` (found fraction, median confidence), the guidance
-    observer's time since its last correction, its observability index (thesis 3.30,
-    ``O = |Phi|^2`` for two points: the median over the window of the values on corrected steps
-    must reach ``min_observability``; a weakly excited observer's height is its initial guess,
-    whatever the other checks say), then, below ``agreement_below_ft`` (at 200 and 100 ft: the
+    observer's time since its last correction, its observability, then, below ``agreement_below_ft`` (at 200 and 100 ft: the
     line observer is not converged at 400 ft on the thesis approaches, 30-50 % off on thesis-1
     with a crosswind), its agreement with the line observer on dH and dY.
+
+    Observability. The instantaneous index (thesis 3.30, ``O = |Phi|^2``, (m/s)^2) is small on a
+    stabilised glide path by nature (the corners sit near the focus of expansion: 3-230 at 400 ft
+    on a glide-path start, thesis-1 and thesis-3, against about 5000 in level flight), so a
+    threshold on it would send nominal approaches around. What the height rests on is what the
+    observer has *accumulated*: since ``y_v' = Phi eta`` (thesis 3.29), a relative height error
+    ``d`` moves the predicted corners by ``d`` times their image motion due to the translation.
+    That motion, in pixels of the real camera (the virtual-frame rate ``Phi eta`` of each measured
+    corner carried through the camera's projection, summed over the two corners and the corrected
+    steps), is the "depth flow" ``F``: a 1 px measurement resolves the height to about ``1 / F``.
+    The decision asks ``F >= min_depth_flow_px`` (20 px: about 5 %); the window's median ``O``
+    is reported too.
     """
 
     decision_heights_ft: tuple = (400.0, 200.0, 100.0)
@@ -61,7 +70,7 @@ class MonitorParams:
     max_dh_disagreement_m: float = 3.0    # |dH points - dH lines|, or 5 % of dH if larger
     max_dy_disagreement_m: float = 3.0    # |dY points - dY lines|
     max_coast_s: float = 0.5              # the guidance observer's time since its last correction
-    min_observability: float = 30.0       # median O of the guidance observer's corrected steps in the window
+    min_depth_flow_px: float = 20.0       # accumulated corner motion due to the translation (see above)
     agreement_below_ft: float = 300.0     # the line observer converges later: agreement judged below this height only
 
 
@@ -205,10 +214,28 @@ class StepInputs:
                              center_line=center, dpsi_rad=dpsi, roll_rad=float(roll_rad), pitch_rad=float(pitch_rad))
 
 
+def _depth_flow_px(inp, dh_m, fx_px, dt_s) -> float:
+    """Pixels the measured corners of ``inp`` move in ``dt_s`` through the translation alone:
+    ``y_v' = Phi eta`` (thesis 3.29, :func:`visland.features.point_virtual_dynamics`) carried
+    through the projection (virtual ray ``(y1, y2, 1)`` -> camera ray -> ``fx x / z``)."""
+    from visland.features import point_virtual_dynamics
+    y_v = np.asarray(inp.points_yv, float)
+    y_dot, _ = point_virtual_dynamics(y_v, 1.0 / dh_m, np.asarray(inp.v_runway_mps, float))
+    R_cr = np.asarray(inp.R_runway_from_camera, float).T
+    total = 0.0
+    for y, yd in zip(y_v, y_dot):
+        a = R_cr @ np.array([y[0], y[1], 1.0])
+        b = R_cr @ np.array([y[0] + yd[0] * dt_s, y[1] + yd[1] * dt_s, 1.0])
+        if a[2] * b[2] <= 0:
+            continue                       # behind the camera: no image motion to speak of
+        total += fx_px * math.hypot(b[0] / b[2] - a[0] / a[2], b[1] / b[2] - a[1] / a[2])
+    return total if math.isfinite(total) else 0.0
+
+
 class _Tracked:
     """An observer run step by step, with its latest deviations."""
 
-    def __init__(self, name, aim_m):
+    def __init__(self, name, aim_m, fx_px=1.0):
         from visland.estimation.registry import make_observer
         self.observer = make_observer(name)
         self.aim_m = aim_m
@@ -218,6 +245,8 @@ class _Tracked:
         self.observability = math.nan
         self.coast_reason = ""
         self.observability_log = []        # (t, O) on corrected steps
+        self.fx_px = fx_px
+        self.depth_flow_px = 0.0           # fx * integral of sqrt(O) / dH over corrected steps (MonitorParams)
         self._last_yv = None
 
     def step(self, inp, dh0_m):
@@ -236,6 +265,9 @@ class _Tracked:
             self.dh_m = estimate.dh_m
             self.observability = float(estimate.observability)
             if not estimate.coasting:
+                if inp.points_yv is not None and self.dh_m > 0:
+                    self.depth_flow_px += _depth_flow_px(inp, self.dh_m, self.fx_px,
+                                                         min(inp.t_s - self.last_correction_s, 0.2))
                 self.last_correction_s = inp.t_s
                 if math.isfinite(self.observability):
                     self.observability_log.append((float(inp.t_s), self.observability))
@@ -301,8 +333,8 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
                    if np.any(options.calibration_error_deg) else camera)
     steps_per_frame = int(round(50.0 / options.fps))
     prep = StepInputs(camera)
-    guide_obs = _Tracked(options.observer, aim)
-    monitor_obs = _Tracked(options.monitor_observer, aim)
+    guide_obs = _Tracked(options.observer, aim, camera.fx)
+    monitor_obs = _Tracked(options.monitor_observer, aim, camera.fx)
     dh0 = options.initial_height_m or (1.0 + options.initial_error) * scenario.initial_height_m
     renderer = detector = None
     if options.measure == "detection":
@@ -400,6 +432,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
             ok, why = _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true, h_ft)
             decisions.append({"height_ft": h_ft, "t_s": round(t, 3), "continue": ok, "reason": why,
                               "observability": _r(_recent_observability(guide_obs, t, options.monitor.window_s)),
+                              "depth_flow_px": _r(guide_obs.depth_flow_px),
                               "coast_s": _r(t - guide_obs.last_correction_s),
                               "dh_true_m": round(h_true, 3), "dy_true_m": round(float(state.p_runway_m[1]), 3),
                               "dh_points_m": _r(guide_obs.dh_m), "dy_points_m": _r(guide_obs.dy_m),
@@ -565,10 +598,11 @@ def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true, h_ft=200.0)
         return False, f"no estimate from {guide_obs.observer.name}"
     if t - guide_obs.last_correction_s > m.max_coast_s:
         return False, f"{guide_obs.observer.name} coasting for {t - guide_obs.last_correction_s:.1f} s"
-    o = _recent_observability(guide_obs, t, m.window_s)
-    if not o >= m.min_observability:
-        return False, (f"{guide_obs.observer.name}'s observability index {o:.3g} over the last {m.window_s:g} s "
-                       f"< {m.min_observability:g}")
+    if not guide_obs.depth_flow_px >= m.min_depth_flow_px:
+        return False, (f"{guide_obs.observer.name}'s height is weakly observable: its corners moved "
+                       f"{guide_obs.depth_flow_px:.1f} px through the translation since its start "
+                       f"(< {m.min_depth_flow_px:g} px, a height resolved to worse than "
+                       f"{100.0 / max(m.min_depth_flow_px, 1e-9):.0f} %)")
     if h_ft < m.agreement_below_ft and monitor_obs.started and math.isfinite(monitor_obs.dh_m):
         limit = max(m.max_dh_disagreement_m, 0.05 * guide_obs.dh_m)
         gap = abs(guide_obs.dh_m - monitor_obs.dh_m)

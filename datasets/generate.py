@@ -158,18 +158,23 @@ def frame_seed(scene_seed: int, index: int) -> int:
     return (int(scene_seed) * 1_000_003 + int(index)) % (2 ** 63)
 
 
+def encode_frame_png(rgb, png_compression: int, index: int = -1) -> bytes:
+    """The PNG bytes of a rendered RGB frame, as every dataset stores them (OpenCV, BGR order)."""
+    import cv2
+    ok, encoded = cv2.imencode(".png", np.ascontiguousarray(rgb[..., ::-1]),
+                               [cv2.IMWRITE_PNG_COMPRESSION, int(png_compression)])
+    if not ok:
+        raise RuntimeError(f"frame {index}: PNG encoding failed")
+    return encoded.tobytes()
+
+
 def render_frame_png(payload: dict, index: int, p_runway_m, R_camera_from_runway) -> tuple[int, bytes]:
     """Render and PNG-encode one frame; ``(index, png_bytes)``. Safe to call from several threads."""
-    import cv2
     with _WORKER_LOCK:
         renderer = _renderer_for(payload)
         rgb = renderer.render(np.asarray(p_runway_m, float), np.asarray(R_camera_from_runway, float),
                               frame_seed=frame_seed(payload["scene"]["seed"], index))
-    ok, encoded = cv2.imencode(".png", np.ascontiguousarray(rgb[..., ::-1]),
-                               [cv2.IMWRITE_PNG_COMPRESSION, int(payload["png_compression"])])
-    if not ok:
-        raise RuntimeError(f"frame {index}: PNG encoding failed")
-    return index, encoded.tobytes()
+    return index, encode_frame_png(rgb, payload["png_compression"], index)
 
 
 def _pool_task(task):
@@ -334,23 +339,30 @@ def generate_dataset(job: GenerateJob, out_dir, workers: int = 1, scheduler: str
     for i, name in enumerate(names):
         if i not in digests:
             digests[i] = hashlib.sha256((frames_dir / name).read_bytes()).hexdigest()
-    manifest = dict(identity)
-    manifest.update({
-        "n_frames": n, "image_size": [camera.width, camera.height], "fps": job.options.fps,
-        "duration_s": result.trajectory.duration_s, "end_reason": result.trajectory.end_reason,
-        "camera_true_mount_rpy_deg": list(camera.mount_rpy_deg),
-        "files": {"frames": "frames/", "frames_csv": "frames.csv", "telemetry": "telemetry.csv", "truth": "truth.csv",
-                  "labels": "labels.csv", "camera": "camera.json", "runway": "runway.json",
-                  **({"lard": "lard/labels.csv"} if job.lard else {})},
-        "frames": [{"frame": i, "file": f"frames/{names[i]}", "t_s": round(float(s.t_s[i]), 9), "sha256": digests[i]}
-                   for i in range(n)],
-    })
+    manifest = dataset_manifest(job, result, digests)
     try:
         atomic_write_text(out / "manifest.json", json.dumps(manifest, indent=1) + "\n")
         (out / JOB_FILE).unlink()
     except OSError as error:
         raise _disk_error(out, "manifest.json", error) from None
     return GenerateReport(out, n, len(tasks), reused, time.perf_counter() - t0)
+
+
+def dataset_manifest(job: GenerateJob, result: SimulationResult, digests: dict) -> dict:
+    """``manifest.json`` of a complete dataset of ``job`` (``digests``: frame index -> SHA-256)."""
+    s, camera = result.frames, result.camera_true
+    manifest = dict(job.identity())
+    manifest.update({
+        "n_frames": len(s), "image_size": [camera.width, camera.height], "fps": job.options.fps,
+        "duration_s": result.trajectory.duration_s, "end_reason": result.trajectory.end_reason,
+        "camera_true_mount_rpy_deg": list(camera.mount_rpy_deg),
+        "files": {"frames": "frames/", "frames_csv": "frames.csv", "telemetry": "telemetry.csv", "truth": "truth.csv",
+                  "labels": "labels.csv", "camera": "camera.json", "runway": "runway.json",
+                  **({"lard": "lard/labels.csv"} if job.lard else {})},
+        "frames": [{"frame": i, "file": f"frames/{frame_name(i)}", "t_s": round(float(s.t_s[i]), 9),
+                    "sha256": digests[i]} for i in range(len(s))],
+    })
+    return manifest
 
 
 def _run_pool(workers: int, payload: dict, tasks: list, write) -> None:

@@ -17,7 +17,11 @@ decodes each frame once for every source):
   (``tests/datasets/test_stream.py`` checks it frame for frame);
 - frames render ahead of the measurement: in a background thread (one process), in a pool of
   worker processes (``workers`` > 1, each with its GL context), and the whole scenario is one
-  task on a Dask worker with ``--scheduler`` (see :mod:`visland.datasets.campaign`).
+  task on a Dask worker with ``--scheduler`` (see :mod:`visland.datasets.campaign`);
+- frames are kept only when asked (``keep_frames``): a :class:`FrameWriter` encodes and writes
+  them in background threads (OpenCV's PNG encoder and hashlib release the GIL) while the
+  measurement goes on, and the folder ends as a complete dataset, byte-identical to
+  ``visland generate``'s (same PNG encoding, same manifest with every frame's SHA-256).
 """
 from __future__ import annotations
 
@@ -33,7 +37,7 @@ from visland.contracts import FRAMES_COLUMNS, read_frames_csv, read_labels, read
 from visland.datasets.sources import FrameSource
 from visland.folder import as_grey, interpolate_telemetry
 
-__all__ = ["RenderedSource", "write_dataset_files", "stream_process"]
+__all__ = ["RenderedSource", "FrameWriter", "write_dataset_files", "stream_process"]
 
 
 def write_dataset_files(result, folder) -> None:
@@ -45,6 +49,79 @@ def write_dataset_files(result, folder) -> None:
     write_simulation_files(result, folder)
     write_csv(folder / "frames.csv", {"frame": np.arange(len(result.frames)), "t_s": result.frames.t_s},
               FRAMES_COLUMNS)
+
+
+class FrameWriter:
+    """Write rendered frames as ``frames/NNNNNN.png`` in background threads.
+
+    ``put(index, rgb)`` hands a frame over and returns at once unless ``queue_size`` frames are
+    already waiting (then it blocks: memory stays bounded at ``queue_size`` frames, 12.6 MB each
+    at 2048 px). ``close()`` waits for the last frame and raises the first error a writer met.
+    Each frame is encoded as :func:`visland.datasets.generate.encode_frame_png` and written
+    atomically (a frame file that exists is complete); ``digests`` maps index -> SHA-256.
+
+    Attributes
+    ----------
+    encode_s : float
+        Seconds the writer threads spent encoding, hashing and writing (summed over threads).
+    blocked_s : float
+        Seconds ``put`` waited on a full queue: the time the producer lost to the writer.
+    """
+
+    def __init__(self, frames_dir, png_compression: int = 1, threads: int = 1, queue_size: int = 8):
+        self.frames_dir = Path(frames_dir)
+        self.frames_dir.mkdir(parents=True, exist_ok=True)
+        self.png_compression = int(png_compression)
+        self.digests: dict = {}
+        self.encode_s = 0.0
+        self.blocked_s = 0.0
+        self._queue: queue.Queue = queue.Queue(maxsize=max(1, int(queue_size)))
+        self._error = None
+        self._lock = threading.Lock()
+        self._threads = [threading.Thread(target=self._run, daemon=True) for _ in range(max(1, int(threads)))]
+        for thread in self._threads:
+            thread.start()
+
+    def _run(self):
+        import hashlib
+        from visland.contracts import atomic_write_bytes
+        from visland.datasets.generate import encode_frame_png, frame_name
+        while True:
+            item = self._queue.get()
+            if item is None:
+                return
+            if self._error is not None:
+                continue                      # drain: the first error is what close() reports
+            index, rgb = item
+            tic = time.perf_counter()
+            try:
+                data = encode_frame_png(rgb, self.png_compression, index)
+                atomic_write_bytes(self.frames_dir / frame_name(index), data)
+                digest = hashlib.sha256(data).hexdigest()
+            except BaseException as error:    # handed to close()
+                with self._lock:
+                    self._error = self._error or error
+                continue
+            with self._lock:
+                self.digests[index] = digest
+                self.encode_s += time.perf_counter() - tic
+
+    def put(self, index: int, rgb) -> None:
+        """Queue frame ``index`` (an RGB array the caller no longer modifies)."""
+        if self._error is not None:
+            raise self._error
+        tic = time.perf_counter()
+        self._queue.put((int(index), rgb))
+        self.blocked_s += time.perf_counter() - tic
+
+    def close(self) -> None:
+        """Wait for every queued frame to be written; raise the first writing error."""
+        for _ in self._threads:
+            self._queue.put(None)
+        for thread in self._threads:
+            thread.join()
+        if self._error is not None:
+            raise self._error
 
 
 def _render_task(task):
@@ -74,15 +151,18 @@ class RenderedSource(FrameSource):
         processes (frames come back in order).
     prefetch : int
         Frames rendered ahead of the consumer (each is ``H x W x 3`` bytes: 12.6 MB at 2048 px).
+    writer : FrameWriter or None
+        Also hand every rendered frame to this writer (frames kept as PNG files).
     """
 
-    def __init__(self, root, job, result, workers: int = 1, prefetch: int = 4):
+    def __init__(self, root, job, result, workers: int = 1, prefetch: int = 4, writer: FrameWriter | None = None):
         self.root = Path(root)
         self.name = str(self.root)
         self._job = job
         self._result = result
         self._workers = int(workers)
         self._prefetch = max(1, int(prefetch))
+        self._writer = writer
         # read back exactly as FrameFolder reads a folder (same files, same parsing)
         times = read_frames_csv(self.root / "frames.csv")
         self.times_s = times["t_s"]
@@ -170,20 +250,52 @@ class RenderedSource(FrameSource):
             if rgb.shape[:2] != expected:          # the job's camera and camera.json disagree: a bug, say so
                 raise ValueError(f"frame {index}: rendered {rgb.shape[1]}x{rgb.shape[0]}, camera.json says "
                                  f"{self.camera.width}x{self.camera.height}")
+            if self._writer is not None:
+                self._writer.put(index, rgb)
             yield index, (as_grey(rgb) if gray else rgb), None
 
 
-def stream_process(job, dataset_dir, run_dirs: dict, options, workers: int = 1, echo=print) -> dict:
+def stream_process(job, dataset_dir, run_dirs: dict, options, workers: int = 1, echo=print,
+                   keep_frames: bool = False, writer_threads: int = 1) -> dict:
     """Simulate ``job``, write its dataset files (no frames), render and measure every frame in
     memory with every source of ``run_dirs`` (``{source: run folder}``), estimate and write the
     runs as ``visland process`` does with ``options`` (:class:`visland.datasets.process.ProcessOptions`).
+    With ``keep_frames`` a :class:`FrameWriter` also writes the frames, and the dataset's manifest
+    is written last (the folder is then a complete ``visland generate`` dataset).
     Returns ``{source: run.json content}``."""
+    import json
+    from visland.contracts import atomic_write_text
+    from visland.datasets.generate import dataset_manifest
     from visland.datasets.process import process_many
     from visland.simulate import run_simulation
     started = time.perf_counter()
     result = run_simulation(job.scenario, job.options)
     write_dataset_files(result, dataset_dir)
-    source = RenderedSource(dataset_dir, job, result, workers=workers)
-    runs = process_many(source, run_dirs, options, force=True, echo=echo)
+    writer = FrameWriter(Path(dataset_dir) / "frames", job.png_compression, threads=writer_threads) \
+        if keep_frames else None
+    source = RenderedSource(dataset_dir, job, result, workers=workers, writer=writer)
+    try:
+        runs = process_many(source, run_dirs, options, force=True, echo=echo)
+    finally:
+        if writer is not None:
+            tic = time.perf_counter()
+            writer.close()
+            writer.tail_s = time.perf_counter() - tic
     echo(f"{len(source)} frames rendered and measured in memory in {time.perf_counter() - started:.0f} s")
+    if writer is not None:
+        if len(writer.digests) != len(source):
+            raise RuntimeError(f"{dataset_dir}: {len(writer.digests)} of {len(source)} frames written")
+        if job.lard:                              # as visland generate writes them
+            from visland.datasets.generate import frame_name
+            from visland.datasets.lard import lard_rows, write_lard_labels
+            from visland.render.markings import designator_number
+            (Path(dataset_dir) / "lard").mkdir(exist_ok=True)
+            rows = lard_rows(result, [f"frames/{frame_name(i)}" for i in range(len(source))],
+                             f"{designator_number(job.scenario.runway.heading_deg):02d}", job.scenario.name)
+            write_lard_labels(Path(dataset_dir) / "lard" / "labels.csv", rows)
+        atomic_write_text(Path(dataset_dir) / "manifest.json",
+                          json.dumps(dataset_manifest(job, result, writer.digests), indent=1) + "\n")
+        echo(f"frames kept by the background writer: {writer.encode_s:.1f} s of PNG encoding and writing, "
+             f"rendering and measuring waited {writer.blocked_s:.1f} s on it, {writer.tail_s:.1f} s after the "
+             f"last frame")
     return runs

@@ -7,6 +7,7 @@ and the same approach flown on the truth.
 import json
 import math
 
+import numpy as np
 import pytest
 
 from visland.cli import main
@@ -68,30 +69,65 @@ class _FakeObserver:
 class _FakeTracked:
     """The fields of datasets.fly._Tracked that the monitor reads."""
 
-    def __init__(self, dh_m, dy_m, observability_log, started=True):
+    def __init__(self, dh_m, dy_m, depth_flow_px, started=True):
         self.observer = _FakeObserver()
         self.started = started
         self.dx_m, self.dy_m, self.dh_m = -2000.0, dy_m, dh_m
         self.last_correction_s = 10.0
-        self.observability_log = observability_log
+        self.depth_flow_px = depth_flow_px
 
 
-def test_monitor_goes_around_on_a_weak_observability_index_and_judges_agreement_below_300_ft_only():
+def test_monitor_goes_around_on_a_weakly_observable_height_and_judges_agreement_below_300_ft_only():
     from visland.datasets.fly import _monitor
     options = FlyOptions()
     frames = [(9.0 + 0.04 * i, True, 0.9) for i in range(26)]          # found in every frame of the last 1 s
-    weak = _FakeTracked(120.0, 0.0, [(9.5, 4.0), (9.8, 6.0), (10.0, 5.0)])     # median 5 < 30
-    ok, why = _monitor(options, frames, 10.0, weak, _FakeTracked(120.0, 0.0, [], started=False), 121.9, 400.0)
-    assert not ok and "observability index 5 " in why
-    # an old, strong value outside the 1 s window does not count
-    stale = _FakeTracked(120.0, 0.0, [(8.0, 900.0), (9.9, 5.0)])
-    assert not _monitor(options, frames, 10.0, stale, _FakeTracked(120.0, 0.0, [], started=False), 121.9, 400.0)[0]
-    strong = [(9.9, 300.0), (10.0, 320.0)]
-    lines = _FakeTracked(160.0, 5.0, [])                  # 40 m and 5 m away from the points observer
-    assert _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, strong), lines, 121.9, 400.0) == \
+    no_lines = _FakeTracked(120.0, 0.0, 0.0, started=False)
+    ok, why = _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, 12.5), no_lines, 121.9, 400.0)
+    assert not ok and "moved 12.5 px" in why and "worse than 5 %" in why
+    lines = _FakeTracked(160.0, 5.0, 0.0)                 # 40 m and 5 m away from the points observer
+    assert _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, 80.0), lines, 121.9, 400.0) == \
         (True, "estimates consistent")                    # 400 ft: the line observer is not judged
-    ok, why = _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, strong), lines, 121.9, 200.0)
+    ok, why = _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, 80.0), lines, 121.9, 200.0)
     assert not ok and "differ by 40.0 m (> 6.0 m)" in why  # lower: 3 m or 5 % of dH
+    sparse = [(tf, i % 5 == 0, 0.9) for i, (tf, _, _) in enumerate(frames)]
+    ok, why = _monitor(options, sparse, 10.0, _FakeTracked(120.0, 0.0, 80.0), no_lines, 121.9, 400.0)
+    assert not ok and why.startswith("runway found in 23% of the frames")     # 6 of 26
+
+
+def test_depth_flow_is_the_corner_motion_due_to_the_translation():
+    """A camera looking straight down (camera frame = runway axes, so the virtual coordinates are
+    the normalised image coordinates) in level flight at V = 70 m/s, 100 m high: each corner moves
+    at V / H = 0.7 normalised units per second (y_v' = Phi eta, Phi = -v for v3 = 0), so two
+    corners over 2 s of 25 Hz corrections move 2 * fx * 0.7 * 2 pixels."""
+    from visland.datasets.fly import _Tracked
+
+    class _Estimate:
+        coasting, reason, observability, dh_m = False, "", 0.0, 100.0
+
+    class _Observer:
+        features, name = "points", "fake"
+
+        def reset(self, inp, dh0):
+            pass
+
+        def step(self, inp):
+            return _Estimate()
+
+    class _Inp:
+        v_runway_mps = np.array([70.0, 0.0, 0.0])
+        R_runway_from_camera = np.eye(3)
+        lines = None
+
+        def __init__(self, t):
+            self.t_s = t
+            self.points_yv = np.array([[0.3, -0.1], [0.3, 0.1]])
+
+    tracked = _Tracked("kf-2p", 320.0, 618.0)
+    tracked.observer = _Observer()
+    tracked.step(_Inp(0.0), 100.0)
+    for k in range(1, 51):                    # 2 s of corrected steps at 25 Hz
+        tracked.step(_Inp(0.04 * k), 100.0)
+    assert tracked.depth_flow_px == pytest.approx(2 * 618.0 * 0.7 * 2.0, rel=1e-9)
 
 
 def test_a_decision_height_the_approach_starts_below_is_not_called_out():
@@ -151,3 +187,20 @@ def test_monte_carlo_flies_each_case_on_detection_ideal_features_and_truth_and_r
     calls.clear()
     again = fly_module.monte_carlo(2, options, tmp_path, echo=lambda *_: None)
     assert calls == [] and again["detection"] == det                     # resumed from the runs' JSON
+
+
+@pytest.mark.slow
+def test_a_straight_in_glide_path_start_is_weakly_observable_at_400_ft():
+    """Started on the glide path 3 km out with the height 20 % high, nothing but the slow
+    expansion excites kf-2p's height: 13 % (16 m) off at 400 ft on this machine; the monitor
+    says so and the aircraft goes around. Independent truth: thesis-3 (from level flight 25 m
+    below the path, 4 km out) is well excited and continues."""
+    glide = Scenario("glide-3km", dx_m=-3000.0, dy_m=0.0, dgs_m=0.0, dpsi_deg=0.0, gamma_deg=-3.0)
+    run = fly(glide, FlyOptions(seed=0))
+    assert run["go_around"] and "weakly observable" in run["go_around_reason"]
+    assert run["go_around_reason"].startswith("400 ft")
+    assert abs(run["deviations"]["400ft"]["dh_err_m"]) > 0.05 * 121.9     # it was right to
+    from visland.scenarios import resolve_scenario
+    nominal = fly(resolve_scenario("thesis-3"), FlyOptions(seed=0))
+    assert [d["continue"] for d in nominal["decisions"]] == [True, True, True]
+    assert nominal["decisions"][0]["depth_flow_px"] > 100.0

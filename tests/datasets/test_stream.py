@@ -59,3 +59,37 @@ def test_streamed_runs_equal_the_file_route_frame_for_frame(file_route, tmp_path
                 assert list(a) == list(b), f"{kind}: {column}"
         assert ((files / kind / "estimates.csv").read_text() == (streamed / kind / "estimates.csv").read_text())
         assert read_estimates(streamed / kind / "estimates.csv").n_rows == len(OBSERVERS) * by_file.n_rows
+
+
+def test_frames_kept_by_the_background_writer_are_the_file_routes_bytes(file_route, tmp_path):
+    """Independent truth: ``visland generate``'s PNG files and manifest for the same job."""
+    import json
+    job, files = _job(), file_route
+    streamed = tmp_path / "stream"
+    lines = []
+    stream_process(job, streamed / "dataset", {"detection": streamed / "detection"}, OPTIONS, echo=lines.append,
+                   keep_frames=True, writer_threads=2)
+    generated = sorted((files / "dataset" / "frames").iterdir())
+    kept = sorted((streamed / "dataset" / "frames").iterdir())
+    assert [p.name for p in kept] == [p.name for p in generated] and len(kept) >= 30
+    for a, b in zip(generated, kept):
+        assert a.read_bytes() == b.read_bytes(), b.name
+    manifest_file = json.loads((files / "dataset" / "manifest.json").read_text())
+    manifest_stream = json.loads((streamed / "dataset" / "manifest.json").read_text())
+    assert manifest_stream == manifest_file
+    assert (files / "detection" / "estimates.csv").read_text() == (streamed / "detection" / "estimates.csv").read_text()
+    assert any(line.startswith("frames kept by the background writer") for line in lines)
+
+
+def test_a_writer_error_reaches_the_caller(tmp_path):
+    from visland.datasets.stream import FrameWriter
+    blocker = tmp_path / "frames"
+    blocker.write_text("a file where the frames folder should be")
+    with pytest.raises(OSError):
+        FrameWriter(blocker)
+    writer = FrameWriter(tmp_path / "ok")
+    writer.put(0, np.zeros((4, 4, 3), np.uint8))
+    writer.put(1, None)                                        # not an image: encoding fails in the thread
+    with pytest.raises(TypeError):
+        writer.close()
+    assert (tmp_path / "ok" / "000000.png").is_file()
