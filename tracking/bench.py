@@ -51,6 +51,19 @@ def _frames(source: str, camera, scenario, states, indices):
 
 
 def run_track_benchmark(args) -> int:
+    """Run ``visland bench track``: the tracker's speed on synthetic or rendered frames.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``--size``, ``--points``, ``--frames``, ``--repeats``, ``--policy``, ``--distance``,
+        ``--source`` (see ``visland bench track --help``).
+
+    Returns
+    -------
+    int
+        Exit status 0; the last line printed is one JSON object of the figures.
+    """
     for name, low, high in (("size", 64, 8192), ("frames", 5, 5000), ("repeats", 1, 100)):
         value = getattr(args, name)
         if not low <= value <= high:

@@ -39,7 +39,17 @@ _NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 
 def measurement_columns(point_names) -> list:
-    """Column order: the SPEC measurement columns, then the per-point extras."""
+    """Column order: the SPEC measurement columns, then the per-point extras.
+
+    Parameters
+    ----------
+    point_names : sequence of str
+        The tracked points (corners of :data:`visland.runway.CORNER_NAMES` and extra points).
+
+    Returns
+    -------
+    list of str
+    """
     extra = []
     for name in point_names:
         if name not in CORNER_NAMES:
@@ -62,6 +72,24 @@ def steps_to_columns(steps, times_s, point_names, anchor_min_confidence: float =
     ``source`` says how it was measured (``anchored`` when a detection re-anchored a point,
     else ``tracking``); a row that measured nothing (before the designation, a skipped frame)
     carries ``run_source``, the run's own source.
+
+    Parameters
+    ----------
+    steps : sequence of TrackStep or None
+        One entry per frame.
+    times_s : sequence of float
+        The frame times, seconds.
+    point_names : sequence of str
+        The tracked points, in column order.
+    anchor_min_confidence : float, default 0.5
+        An anchor observation under this confidence does not make a row ``anchored``.
+    run_source : str, default "tracking"
+        ``source`` of the rows that measured nothing.
+
+    Returns
+    -------
+    dict of str to list
+        :func:`measurement_columns` -> one value per frame.
     """
     point_names = list(point_names)
     columns = {c: [] for c in measurement_columns(point_names)}
@@ -122,6 +150,16 @@ def parse_designation(text: str) -> list:
     (``";;u,v"`` designates far_left only). Returns ``[(name, (u, v)), ...]``. Positions
     outside the image are kept (the tracker refuses them with a reason); text that is not a
     pair of numbers raises ValueError naming the entry.
+
+    Parameters
+    ----------
+    text : str
+        The ``--init`` value.
+
+    Returns
+    -------
+    list of (str, (float, float))
+        Name and pixel position ``(u, v)`` of each designated point.
     """
     if not isinstance(text, str) or not text.strip():
         raise ValueError("--init: give 'labels' or pixel positions 'u,v;u,v'")
@@ -162,6 +200,21 @@ def designation_from_labels(labels, frame: int, corners=CORNER_NAMES, edge_point
     equal steps of the image segment (the image of a straight edge is the segment between its
     corners' images), named ``left_edge_1``... and ``right_edge_1``...; they are edge points
     for the tracker (matched across the edge only).
+
+    Parameters
+    ----------
+    labels : visland.contracts.Table
+        ``labels.csv`` (exact corners and visibility flags).
+    frame : int
+        The designation frame (a row of ``labels``).
+    corners : sequence of str, default CORNER_NAMES
+        The corners to designate when visible.
+    edge_points : int, default 0
+        Points per side edge, 0 to 20.
+
+    Returns
+    -------
+    list of (str, (float, float))
     """
     if isinstance(edge_points, bool) or not isinstance(edge_points, int) or not 0 <= edge_points <= 20:
         raise ValueError(f"edge_points must be an integer in [0, 20], got {edge_points!r}")

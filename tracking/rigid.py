@@ -44,8 +44,12 @@ __all__ = ["PlaneMotion", "ConsistencyResult", "fit_plane_motion", "check_consis
 class PlaneMotion:
     """Ground-plane motion since the designation: ``y_v = scale * q + shift`` (see module docstring).
 
-    ``scale`` is ``dH_0 / dH_k`` (grows as the aircraft descends), ``shift`` (2,) is
-    ``(c_0 - c_k)_xy / dH_k``.
+    Attributes
+    ----------
+    scale : float
+        ``s_k = dH_0 / dH_k`` (grows as the aircraft descends).
+    shift : ndarray, shape (2,)
+        ``b_k = (c_0 - c_k)_xy / dH_k`` (virtual coordinates, dimensionless).
     """
 
     scale: float
@@ -76,6 +80,16 @@ class ConsistencyResult:
     ``motion`` places each point (see :func:`prediction_std_px`, which ``information``, the
     fit's ``A^T A``, serves for other points): a point may be re-projected or searched for
     where the motion puts it only when this is small.
+
+    Attributes
+    ----------
+    motion : PlaneMotion or None
+    residual_px, consistent : ndarray, shape (n,)
+    threshold_px : float
+        The threshold the residuals were held to, pixels.
+    checked, decided : bool
+    prediction_std_px : ndarray, shape (n,), optional
+    information : ndarray, shape (3, 3), optional
     """
 
     motion: PlaneMotion | None
@@ -172,6 +186,24 @@ def prediction_std_px(motion: PlaneMotion, information: np.ndarray, q, G_virtual
     With each fitted equation's pixel noise ``sigma_px``, the motion's covariance is
     ``sigma^2 (A^T A)^-1``; a point's pixel ``G(s q + b)`` moves by ``J_G [q | I]`` per unit of
     ``(s, b)``, which carries the covariance to the image.
+
+    Parameters
+    ----------
+    motion : PlaneMotion
+        The fitted motion.
+    information : ndarray, shape (3, 3)
+        The fit's ``A^T A`` (:attr:`ConsistencyResult.information`).
+    q : array_like, shape (k, 2)
+        Designation virtual coordinates of the points to place.
+    G_virtual_to_pixels : ndarray, shape (3, 3)
+        ``K R_C_from_L`` now.
+    sigma_px : float
+        Pixel noise of each fitted equation.
+
+    Returns
+    -------
+    ndarray, shape (k,)
+        Pixels.
     """
     q = np.asarray(q, dtype=float).reshape(-1, 2)
     covariance = sigma_px ** 2 * np.linalg.inv(information)
@@ -195,8 +227,8 @@ def check_consistency(q, uv, G_virtual_to_pixels, threshold_px: float, normals=N
                       sigma_px: float = 0.2) -> ConsistencyResult:
     """Fit the shared ground-plane motion and find the points that do not follow it.
 
-    Parameters as :func:`fit_plane_motion`; ``sigma_px`` is the matching noise of one
-    coordinate. A point is inconsistent when its distance to where the *other* points'
+    ``q``, ``uv``, ``G_virtual_to_pixels`` and ``normals`` as in :func:`fit_plane_motion`;
+    ``sigma_px`` is the matching noise of one coordinate. A point is inconsistent when its distance to where the *other* points'
     motion puts it (leave-one-out: a drifting point would otherwise pull the fit towards
     itself) exceeds ``threshold_px`` plus three times that prediction's standard deviation
     (a small, far-away configuration predicts a point only loosely). The point most beyond
@@ -210,6 +242,25 @@ def check_consistency(q, uv, G_virtual_to_pixels, threshold_px: float, normals=N
     residual rows and ``H_i = A_i N^-1 A_i^T``, the residual of i against the fit of the others
     is ``(I - H_i)^-1 e_i``, that fit is ``theta - N^-1 A_i^T (I - H_i)^-1 e_i``, and its
     covariance is ``sigma^2 (N - A_i^T A_i)^-1`` (linear least squares, exactly).
+
+    Parameters
+    ----------
+    q : array_like, shape (n, 2)
+        Designation virtual coordinates.
+    uv : array_like, shape (n, 2)
+        Measured pixels now.
+    G_virtual_to_pixels : ndarray, shape (3, 3)
+        ``K R_C_from_L`` now.
+    threshold_px : float
+        Distance, pixels, beyond which a point does not follow the others.
+    normals : sequence of n entries, optional
+        None for a corner point, a unit (2,) pixel direction across the edge for an edge point.
+    sigma_px : float, default 0.2
+        Matching noise of one coordinate, pixels.
+
+    Returns
+    -------
+    ConsistencyResult
     """
     q = np.asarray(q, dtype=float).reshape(-1, 2)
     uv = np.asarray(uv, dtype=float).reshape(-1, 2)

@@ -45,6 +45,21 @@ class PlanarScene:
     level-0 texel ``2^l i``). ``polygons`` is a list of ``(corners_runway_m (k, 3), grey,
     texture_gain)``: convex ground polygons painted in order, grey level plus
     ``texture_gain`` times the ground texture's deviation from its mean.
+
+    Attributes
+    ----------
+    pyramid : tuple of ndarray
+        The ground texture and its ``pyrDown`` levels, grey levels.
+    x0_m, y0_m : float
+        Runway coordinates of texel (0, 0)'s centre, metres.
+    metres_per_texel : float
+        Texel size at level 0, metres.
+    polygons : tuple
+        The painted polygons, as above.
+    ground_mean : float
+        Mean grey level of the ground texture.
+    sky_level : int, default 200
+        Grey level of the sky.
     """
 
     pyramid: tuple
@@ -205,7 +220,23 @@ def _coverage(uv: np.ndarray, width: int, height: int):
 
 def render_planar(scene: PlanarScene, camera: CameraModel, R_camera_from_runway: np.ndarray,
                   p_camera_runway_m) -> np.ndarray:
-    """Grey image (height, width) uint8 of the scene seen by ``camera`` at ``p_camera_runway_m`` (3,)."""
+    """Grey image of the scene seen by ``camera`` from ``p_camera_runway_m``, through the exact homography.
+
+    Parameters
+    ----------
+    scene : PlanarScene
+        Ground texture and runway polygons.
+    camera : visland.camera.CameraModel
+        Intrinsics (pinhole).
+    R_camera_from_runway : ndarray, shape (3, 3)
+        Rotation from the runway frame R to the camera frame.
+    p_camera_runway_m : array_like, shape (3,)
+        Camera centre in R, metres (z < 0: above the ground).
+
+    Returns
+    -------
+    ndarray, shape (height, width), uint8
+    """
     R = np.asarray(R_camera_from_runway, dtype=float)
     c = np.asarray(p_camera_runway_m, dtype=float)
     if R.shape != (3, 3) or c.shape != (3,):

@@ -60,12 +60,17 @@ class ReferencePatch:
 class Texture:
     """How well a patch pins a point down (structure tensor of the patch).
 
-    ``weak`` and ``strong`` are the RMS grey-level gradients (grey levels per pixel) along the
-    patch's weakest and strongest directions (square roots of the eigenvalues of the mean of
-    ``grad grad^T``); ``normal`` (2,) is the strongest direction (across an edge). ``kind``
-    is ``"corner"`` (both directions textured: the point is pinned down), ``"edge"`` (only
-    across one direction: it can slide along the edge, the aperture problem) or
-    ``"featureless"``.
+    Attributes
+    ----------
+    weak, strong : float
+        RMS grey-level gradients (grey levels per pixel) along the patch's weakest and
+        strongest directions (square roots of the eigenvalues of the mean of ``grad grad^T``).
+    normal : ndarray, shape (2,)
+        The strongest direction (across an edge), a unit vector in pixels (u, v).
+    kind : str
+        ``"corner"`` (both directions textured: the point is pinned down), ``"edge"`` (only
+        across one direction: it can slide along the edge, the aperture problem) or
+        ``"featureless"``.
     """
 
     weak: float
@@ -78,10 +83,19 @@ class Texture:
 class Match:
     """Result of looking for a template in a search window.
 
-    ``found`` is True when a peak was accepted; otherwise ``reason`` says why (score too low,
-    ambiguous, peak on the window border, window outside the image). ``uv`` (2,) is the
-    sub-pixel position of the template's reference point (NaN when not found), ``score`` the
-    best correlation, ``second_score`` the best correlation away from the peak (NaN if none).
+    Attributes
+    ----------
+    found : bool
+        True when a peak was accepted.
+    reason : str
+        Otherwise why not (score too low, ambiguous, peak on the window border, window outside
+        the image).
+    uv : ndarray, shape (2,)
+        Sub-pixel position of the template's reference point (SPEC pixels), NaN when not found.
+    score : float
+        The best normalised cross-correlation.
+    second_score : float
+        The best correlation away from the peak (NaN if none).
     """
 
     found: bool
@@ -119,6 +133,19 @@ def patch_texture(pixels: np.ndarray, min_texture: float, min_contrast: float) -
     """Structure tensor of a patch and its kind (see :class:`Texture`).
 
     Gradients are central differences (grey levels per pixel) on the patch interior.
+
+    Parameters
+    ----------
+    pixels : ndarray, shape (h, w), h and w >= 3
+        The patch, grey levels.
+    min_texture : float
+        Weakest-direction gradient (grey levels per pixel) under which the patch is an edge.
+    min_contrast : float
+        Strongest-direction gradient under which it is featureless.
+
+    Returns
+    -------
+    Texture
     """
     p = np.asarray(pixels, dtype=np.float64)
     if p.ndim != 2 or min(p.shape) < 3:
@@ -147,6 +174,15 @@ def template_from_reference(reference: ReferencePatch, template_size: int,
     ``A_reference_from_image`` (2x2: a displacement in the current image maps to this
     displacement in the reference's image, the local linear map of the ground-plane motion),
     the template is resampled (bilinear) so that the point sits exactly at its centre.
+
+    Parameters
+    ----------
+    reference : ReferencePatch
+        The patch cut when the template was last updated (:func:`cut_reference`).
+    template_size : int
+        Side of the template, pixels (odd, at most the reference's side).
+    A_reference_from_image : ndarray, shape (2, 2), optional
+        The warp (none: the reference's central square as it is).
 
     Returns
     -------
@@ -192,7 +228,23 @@ def refine_translation(image: np.ndarray, template: np.ndarray, centre_uv, itera
     constrain (along an edge) are left unchanged: the normal matrix is inverted on its
     well-conditioned eigen-directions only.
 
-    Returns the refined centre (2,), or None if it moved more than one pixel (diverged).
+    Parameters
+    ----------
+    image : ndarray, shape (H, W)
+        The current frame, grey levels.
+    template : ndarray, shape (T, T)
+        The template, grey levels.
+    centre_uv : array_like, shape (2,)
+        Starting pixel position of the template's centre.
+    iterations : int, default 6
+        Most Gauss-Newton steps.
+    tolerance_px : float, default 0.005
+        Stop when a step is shorter than this, pixels.
+
+    Returns
+    -------
+    ndarray, shape (2,) or None
+        The refined centre, or None if it moved more than one pixel (diverged).
     """
     t = np.asarray(template, dtype=np.float32)
     size = t.shape[0]
@@ -239,6 +291,9 @@ def match_in_window(image: np.ndarray, template: np.ndarray, offset_px, predicte
         of its predicted position.
     min_score, ambiguity_margin, ambiguity_distance_px : acceptance rules (see
         :class:`visland.tracking.TrackerParams`).
+    subpixel : str, default "gradient"
+        How the peak is refined below a pixel: ``"gradient"`` (Gauss-Newton on the template,
+        :func:`refine_translation`) or ``"parabola"`` (a parabola through the scores).
 
     Returns
     -------
@@ -294,7 +349,19 @@ def match_in_window(image: np.ndarray, template: np.ndarray, offset_px, predicte
 
 
 def apply_homography(H: np.ndarray, uv) -> np.ndarray:
-    """Map pixel points ``(..., 2)`` through a 3x3 homography."""
+    """Map pixel points through a 3x3 homography.
+
+    Parameters
+    ----------
+    H : ndarray, shape (3, 3)
+        The homography, acting on homogeneous points ``(u, v, 1)``.
+    uv : array_like, shape (..., 2)
+        Points (pixels, or virtual coordinates for ``G^-1``).
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+    """
     uv = np.asarray(uv, dtype=float)
     w = H[2, 0] * uv[..., 0] + H[2, 1] * uv[..., 1] + H[2, 2]
     u = (H[0, 0] * uv[..., 0] + H[0, 1] * uv[..., 1] + H[0, 2]) / w
@@ -307,6 +374,18 @@ def homography_jacobian(H: np.ndarray, uv) -> np.ndarray:
 
     With ``[a, b, w] = H [u, v, 1]``: ``d(a/w) = (dA - (a/w) dW) / w`` where ``dA`` and ``dW``
     are the first two entries of H's first and third rows.
+
+    Parameters
+    ----------
+    H : ndarray, shape (3, 3)
+        The homography.
+    uv : array_like, shape (2,)
+        Where the derivative is taken.
+
+    Returns
+    -------
+    ndarray, shape (2, 2)
+        ``d H(x) / d x`` at ``uv``.
     """
     u, v = float(uv[0]), float(uv[1])
     a = H[0, 0] * u + H[0, 1] * v + H[0, 2]
