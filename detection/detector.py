@@ -34,6 +34,7 @@ from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import LineFit, NoFit, PixelLine, chroma_boundary, refine_line
 from visland.detection.result import DetectionResult, not_found
+from visland.detection.threshold_marking import threshold_marking
 from visland.detection.transverse import find_transverse_line, surface_extent
 from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
@@ -567,6 +568,31 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         near = None
     elif near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
+    far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
+                               window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour,
+                               surface_level=surface_level)
+    far_withheld = False
+    if near is not None:
+        # pavement before the threshold (displaced threshold, blast pad): the threshold is the
+        # marking across the runway inside it, not where the pavement begins
+        marking = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
+                                    near.depth_px, 1.0, min_step, surface_level=surface_level,
+                                    pavement_step=near.step)
+        if marking is not None:
+            notes.append(f"threshold on the {marking.kind} marking {marking.pavement_widths:.1f} runway widths "
+                         "inside the pavement")
+            near = marking.line
+    if near is not None and far is not None and far.spans:
+        # a runway is a long strip (params.min_length_to_width widths at least): an "end" found
+        # nearer than that past the threshold is a marking (the far side of the threshold stripes
+        # when the surface seemed to end there), not the runway's end
+        # (n widths farther along than depth d lies at depth fx / (fx / d + n k), k = W / h)
+        length_widths = (camera.fx / far.depth_px - camera.fx / near.depth_px) / max(width_slope, 1e-9)
+        if length_widths < params.min_length_to_width:
+            notes.append(f"runway end withheld: {length_widths:.1f} runway widths past the threshold only "
+                         f"(< {params.min_length_to_width:g})")
+            far = None
+            far_withheld = True
     if near is not None:
         threshold_line = _line_chart(camera, near.line_h)
         for index, uv in ((0, near.corner_left_uv), (1, near.corner_right_uv)):
@@ -575,12 +601,9 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
                 corners_found[index] = True
         if not corners_found[:2].all():
             notes.append("a threshold corner lies outside the image")
-    far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
-                               window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour,
-                               surface_level=surface_level)
     if far is not None and not far.spans:
         notes.append("runway end withheld: the transverse step found does not span the runway's width")
-    elif far is None:
+    elif far is None and not far_withheld:
         notes.append("runway end not found")
     if far is not None and far.spans:
         end_line = _line_chart(camera, far.line_h)

@@ -91,3 +91,33 @@ def test_a_rendered_frame_with_a_parallel_taxiway_at_600_m_is_not_paired_with_it
     assert result.found, result.reason
     assert errors["edge_px"] < 1.0, errors
     assert not errors["gross"], errors
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("pre_threshold_m, bar, distance", [(150.0, False, 600.0), (300.0, True, 400.0),
+                                                             (60.0, False, 900.0)])
+def test_pavement_before_the_threshold_does_not_move_the_threshold(pre_threshold_m, bar, distance):
+    """Ray-cast airport (independent of visland's renderer) with paved surface before the
+    threshold: a blast pad (60, 150 m, the stripes 6 m past the threshold mark it) or a displaced
+    threshold's pavement (300 m, a white bar at the threshold). The labels put the threshold at
+    x = 0; placing it where the pavement begins was 5 to 305 px off in these frames."""
+    from tests.helpers.detection_frames import airport_frame
+    from tests.helpers.raycast_airport import PaintedAirport
+    from visland.camera import CameraModel
+    from visland.detection import detect_runway
+
+    camera = CameraModel.default(768)
+    scene = PaintedAirport(seed=4, pre_threshold_m=pre_threshold_m, threshold_bar=bar)
+    image, state, labels = airport_frame("thesis-3", distance, camera, scene)
+    result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    assert result.found, result.reason
+    assert result.corners_found[:2].all(), result.reason
+    near = np.linalg.norm(result.corners_uv[:2] - labels.corners_uv[0, :2], axis=1)
+    assert near.max() < 1.0, (near, result.reason)
+    # and without the pavement before it, the threshold stays where the pavement begins
+    plain = PaintedAirport(seed=4)
+    image, state, labels = airport_frame("thesis-3", distance, camera, plain)
+    result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    assert result.found and result.corners_found[:2].all(), result.reason
+    assert np.linalg.norm(result.corners_uv[:2] - labels.corners_uv[0, :2], axis=1).max() < 1.0
+    assert "inside the pavement" not in result.reason

@@ -69,6 +69,11 @@ class PaintedAirport:
     #: along the landing direction) and how far it runs out; 23 m wide, the taxiway grey
     joining_taxiways: tuple = ()
     taxiway_grey: float = 122.0
+    #: paved length before the threshold (a blast pad or a displaced threshold's pavement), the
+    #: runway's width and grey, no markings on it; the threshold (x = 0) stays where the labels
+    #: say, marked by the stripes 6 m past it and, with ``threshold_bar``, a 1.8 m white bar at it
+    pre_threshold_m: float = 0.0
+    threshold_bar: bool = False
     #: grey level of the distance haze (and of rays that reach no ground)
     haze_grey: float = 165.0
 
@@ -110,6 +115,10 @@ class PaintedAirport:
         if not self.runway:
             return rects, marks
         rects.append((L / 2, 0.0, L / 2, half, 0.0, self.runway_grey))
+        if self.pre_threshold_m > 0:
+            rects.append((-self.pre_threshold_m / 2, 0.0, self.pre_threshold_m / 2, half, 0.0, self.runway_grey))
+        if self.threshold_bar:
+            marks.append((0.9, 0.0, 0.9, half - 0.9, 0.0, self.marking_grey))
         if self.side_stripes:
             for sign in (-1.0, 1.0):
                 marks.append((L / 2, sign * (half - 0.45), L / 2, 0.45, 0.0, self.marking_grey))

@@ -1,0 +1,204 @@
+"""The threshold marking when pavement continues before the threshold (issue 11).
+
+The threshold is the line where the runway begins (SPEC), which on most runways is where the
+pavement begins: :func:`visland.detection.transverse.find_transverse_line` finds it there. A
+displaced threshold or a blast pad puts paved surface before it (tens to hundreds of metres,
+with arrows or chevrons on it); the threshold is then marked on the pavement: a transverse bar
+across the whole width (displaced threshold), or the threshold stripes, which begin 6 m past the
+threshold (ICAO Annex 14, 5.2.4; FAA AC 150/5340-1, 20 ft).
+
+From the pavement's start the runway is read inwards along transverse lines (through V2, the
+vanishing point of the ground direction across the runway): per line, which samples between
+the edges are markings (white paint: brighter than the pavement by more than the pavement
+differs from the ground). A line belongs to the threshold marking when it holds markings in every quarter of the
+width, either as one bar covering most of it or as several separate stripes. Other markings
+do not: the centre line, arrows and the designation are central, touchdown-zone and aiming-point
+marks leave the middle free, and a chevron's two arms cross a line at two places only.
+
+Only when such a band starts clearly inside the pavement (``min_pavement_widths`` runway widths
+along it at least; ICAO stripes begin 6 m in, 0.1 to 0.26 widths; blast pads and displaced
+thresholds are 30 m to several hundred metres long) is the pavement before it
+taken as paved ground before the threshold, and the threshold placed at the band: at its near
+edge for a bar, 6 m before it for stripes. Otherwise nothing changes.
+
+Depths and along-runway lengths: with ``k = W / h`` the runway's width over the camera's height
+(the pencil slopes' difference) and ``d = f h / x`` (x the distance ahead), a point ``n`` runway
+widths farther along than depth ``d`` is at depth ``f / (f / d + n k)``.
+
+Pixels: (0, 0) is the centre of the top-left pixel (SPEC).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from visland.detection.horizon import HorizonFrame
+from visland.detection.refine import PixelLine
+from visland.detection.transverse import TransverseLine
+
+__all__ = ["ThresholdMarking", "threshold_marking", "STRIPES_FROM_THRESHOLD_WIDTHS"]
+
+#: Threshold stripes begin 6 m past the threshold (ICAO Annex 14 5.2.4.5; FAA: 20 ft), in runway
+#: widths for a 45 m runway (the width is not known in metres: 0.1 to 0.26 of 23-60 m widths).
+STRIPES_FROM_THRESHOLD_WIDTHS = 6.0 / 45.0
+
+
+@dataclass(frozen=True)
+class ThresholdMarking:
+    """The threshold marking found inside the pavement: the threshold line and how it was placed.
+
+    ``kind`` is ``"bar"`` (a transverse bar: the threshold at its near edge) or ``"stripes"``
+    (the threshold 6 m before them); ``pavement_widths`` the paved length before the marking,
+    in runway widths.
+    """
+
+    line: TransverseLine
+    kind: str
+    pavement_widths: float
+
+
+def _meet(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    p = np.cross(a, b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return p[..., :2] / p[..., 2:3]
+
+
+def _horizon_parallel(horizon: HorizonFrame, depth: float) -> np.ndarray:
+    n = horizon.n_uv
+    return np.array([n[0], n[1], -(n @ horizon.q_uv) - depth])
+
+
+def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
+                      d_pavement: float, d_far: float, min_step: float, surface_level: float = math.nan,
+                      pavement_step: float = 0.0, min_pavement_widths: float = 0.8, max_pavement_widths: float = 12.0,
+                      n_columns: int = 64, step_d_px: float = 0.5) -> ThresholdMarking | None:
+    """The threshold marking when the pavement before it starts at ``d_pavement`` (module docstring).
+
+    Parameters
+    ----------
+    image : ndarray (H, W) uint8
+        Grey levels.
+    horizon : HorizonFrame
+    s0 : float
+        The runway's vanishing point on the horizon.
+    left, right : PixelLine
+        The runway's edges.
+    d_pavement : float
+        Depth (px below the horizon) where the pavement begins (the threshold found so far).
+    d_far : float
+        Depth of the far end of the edges' support: the search stays nearer than it.
+    min_step : float
+        Grey levels: markings must be brighter than the pavement by twice this at least.
+    surface_level : float, optional
+        The pavement's own grey level between markings (else the median of the rows read).
+    pavement_step : float, optional
+        Grey-level step from the ground to the pavement where it begins: markings must be
+        brighter than the pavement by at least as much.
+    min_pavement_widths, max_pavement_widths : float
+        The marking must begin between these many runway widths inside the pavement.
+
+    Returns
+    -------
+    ThresholdMarking or None
+        None when no threshold marking begins inside the pavement (the usual runway, or one
+        without threshold markings: the pavement's start stands).
+    """
+    line_left, line_right = left.homogeneous(), right.homogeneous()
+    sd_left = horizon.to_sd(_meet(line_left, _horizon_parallel(horizon, d_pavement)))
+    sd_right = horizon.to_sd(_meet(line_right, _horizon_parallel(horizon, d_pavement)))
+    width_k = float(sd_right[0] - sd_left[0]) / d_pavement
+    k_centre = (0.5 * (sd_left[0] + sd_right[0]) - s0) / d_pavement
+    fx = horizon.camera.fx
+    if not (math.isfinite(width_k) and width_k > 0 and d_pavement > 1.0):
+        return None
+
+    def depth_at(widths):                      # depth of the point `widths` runway widths farther along
+        return fx / (fx / d_pavement + widths * width_k)
+
+    d_lo = max(depth_at(max_pavement_widths), d_far + 2.0, 1.0)
+    d_hi = d_pavement - 0.5
+    if d_hi - d_lo < 4.0:
+        return None
+    depths = np.arange(d_hi, d_lo, -step_d_px)                      # from the pavement's start inwards
+    v2 = horizon.perpendicular_vanishing_point_h(s0)
+    centre = horizon.pencil_point(s0, k_centre, depths)
+    transverse = np.cross(np.concatenate([centre, np.ones((len(depths), 1))], axis=1), v2)
+    ends_left, ends_right = _meet(transverse, line_left), _meet(transverse, line_right)
+    # clear of the side stripes (a few per cent of the width) and of the edges' blur
+    fractions = np.linspace(0.06, 0.94, n_columns)
+    grid = ends_left[:, None, :] + fractions[None, :, None] * (ends_right - ends_left)[:, None, :]
+    height, width = image.shape
+    finite = np.isfinite(grid).all(axis=-1)
+    inside = finite & (grid[..., 0] >= 0) & (grid[..., 0] <= width - 1) & (grid[..., 1] >= 0) \
+        & (grid[..., 1] <= height - 1)
+    rows_ok = inside.all(axis=1)
+    if rows_ok.sum() < 8:
+        return None
+    # a line must cross the runway over several pixels to tell stripes apart
+    span_px = np.linalg.norm(ends_right - ends_left, axis=1)
+    rows_ok &= span_px >= 2.0 * n_columns / 8.0
+    if rows_ok.sum() < 8:
+        return None
+    maps = (np.where(inside, grid[..., 0], -1).astype(np.float32), np.where(inside, grid[..., 1], -1).astype(np.float32))
+    values = cv2.remap(np.ascontiguousarray(image, dtype=np.float32), maps[0], maps[1], cv2.INTER_LINEAR,
+                       borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+    values = np.where(inside & rows_ok[:, None], values, np.nan)
+    ok = values[rows_ok]
+    if math.isfinite(surface_level):
+        surface = surface_level
+    else:
+        surface = float(np.nanmedian(ok))
+    # threshold markings are white paint: brighter than asphalt and concrete alike, and by more
+    # than the pavement differs from the ground (a brighter patch of surface, a seam, rubber
+    # deposits, chevrons in yellow are not), which the haze dims in the same proportion
+    sign = 1.0
+    bright = float(np.nanpercentile(ok, 99.0))
+    contrast = bright - surface
+    if not contrast >= max(2.0 * min_step, abs(pavement_step)):
+        return None
+    marked = np.nan_to_num((values - surface) * sign, nan=-1.0) > 0.5 * contrast
+    quarters = np.array_split(np.arange(n_columns), 4)
+    share = np.stack([marked[:, q].mean(axis=1) for q in quarters], axis=1)        # (rows, 4)
+    coverage = marked.mean(axis=1)
+    runs = (np.diff(marked.astype(np.int8), axis=1) == 1).sum(axis=1) + marked[:, 0]
+    spans_all = (share >= 0.15).all(axis=1) & rows_ok
+    is_bar = spans_all & (coverage >= 0.8)
+    is_stripes = spans_all & (runs >= 3)
+    band = is_bar | is_stripes
+    # the first band of at least two lines (1 px), nearest the pavement's start
+    hits = np.nonzero(band[:-1] & band[1:])[0]
+    if not len(hits):
+        return None
+    first = int(hits[0])
+    d_band = float(depths[first])
+    widths_in = (fx / d_band - fx / d_pavement) / width_k
+    if not (min_pavement_widths <= widths_in <= max_pavement_widths):
+        return None
+    # the band's near edge to a fraction of a pixel: the mean level across the width crossing
+    # midway between the plain pavement before it and the band
+    level = np.nanmean(np.where(inside, values, np.nan), axis=1)
+    j_band = slice(first, min(len(depths), first + 3))
+    j_plain = slice(max(0, first - 6), max(0, first - 1))
+    band_level = float(np.nanmean(level[j_band]))
+    plain_level = float(np.nanmean(level[j_plain])) if first >= 2 else surface
+    mid = 0.5 * (band_level + plain_level)
+    edge = d_band
+    for j in range(max(0, first - 4), min(len(depths) - 1, first + 2)):
+        a, b = level[j] - mid, level[j + 1] - mid
+        if math.isfinite(a) and math.isfinite(b) and (a * sign) < 0 <= (b * sign):
+            edge = float(depths[j] + (depths[j + 1] - depths[j]) * a / (a - b))
+            break
+    kind = "bar" if is_bar[first:first + 3].any() else "stripes"
+    if kind == "stripes":
+        # the threshold 6 m before the stripes
+        edge = fx / (fx / edge - STRIPES_FROM_THRESHOLD_WIDTHS * width_k)
+    point = horizon.pencil_point(s0, k_centre, edge)
+    line_h = np.cross(np.array([point[0], point[1], 1.0]), v2)
+    line_h = line_h / np.linalg.norm(line_h[:2])
+    line = TransverseLine(line_h=line_h, corner_left_uv=_meet(line_h, line_left),
+                          corner_right_uv=_meet(line_h, line_right), depth_px=edge,
+                          step=(band_level - plain_level), significance=math.nan, method=f"marking-{kind}", spans=True)
+    return ThresholdMarking(line=line, kind=kind, pavement_widths=float(widths_in))
