@@ -36,7 +36,8 @@ from visland.estimation.registry import make_observer, observer_features
 from visland.estimation.runner import run_observer
 from visland.estimation.thesis_tables import thesis_value
 
-__all__ = ["DICKMANNS_VARIANTS", "SEED_004_TARGETS", "dickmanns_study", "without_airspeed", "wind_case_figures"]
+__all__ = ["DICKMANNS_VARIANTS", "SEED_004_TARGETS", "dickmanns_study", "score_wind_run", "without_airspeed",
+           "wind_case_figures"]
 
 #: Rows of the study: (label, observer, airspeed given to it).
 DICKMANNS_VARIANTS = (("dickmanns-4d", "dickmanns-4d", True),
@@ -309,3 +310,72 @@ def _plot_thesis1(case, runs: dict, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)
+
+
+# --------------------------------------------------------------------------- a processed run
+def score_wind_run(run_dir, echo=print) -> dict:
+    """Seed 004's figures (:data:`SEED_004_TARGETS`) for each observer of a ``visland process`` run of
+    ``dickmanns-wind`` (or any approach with truth): reads ``estimates.csv``, ``truth.csv`` (with its
+    wind columns), ``measurements.csv`` (the threshold counts as visible where both near corners were
+    measured) and, for scoring only, ``runway.json``'s width and aiming distance and ``manifest.json``'s
+    gust time constant. The gust's onset is the frame where the true crosswind jumps up most (at least
+    0.5 m/s between two frames). Prints one row per observer; returns the figures.
+    """
+    import json
+
+    from visland.contracts import read_estimates, read_measurements, read_truth
+    run_dir = Path(run_dir)
+    truth = read_truth(run_dir / "truth.csv")
+    estimates = read_estimates(run_dir / "estimates.csv")
+    measured = read_measurements(run_dir / "measurements.csv")
+    runway = json.loads((run_dir / "runway.json").read_text())
+    tau = 6.0
+    manifest = run_dir / "manifest.json"
+    if manifest.exists():
+        tau = float(json.loads(manifest.read_text()).get("scenario", {}).get("wind", {}).get("gust_time_constant_s",
+                                                                                               tau))
+    t = np.asarray(truth["t_s"], dtype=float)
+    dx_true, dy_true, dh_true = (np.asarray(truth[c], dtype=float) for c in ("dx_m", "dy_m", "dh_m"))
+    wy_true = np.asarray(truth["wind_y_runway_mps"], dtype=float) if "wind_y_runway_mps" in truth else None
+    gust_t0 = math.nan
+    if wy_true is not None and len(wy_true) > 1:
+        jump = np.diff(wy_true)
+        if jump.max() > 0.5:
+            gust_t0 = float(t[int(np.argmax(jump)) + 1])
+    seen = np.isfinite(np.asarray(measured["near_left_u_px"], dtype=float)) & \
+        np.isfinite(np.asarray(measured["near_right_u_px"], dtype=float)) & (np.asarray(measured["found"]) > 0.5)
+    aim = float(runway.get("aim_distance_m", 320.0))
+    from_2km = dx_true > -2000.0 - aim
+    by_1km = dx_true > -1000.0 - aim
+    after_gust = t > gust_t0 + tau
+
+    def worst(error, mask):
+        values = np.abs(error[mask & np.isfinite(error)])
+        return float(values.max()) if values.size else math.nan
+
+    names = list(dict.fromkeys(str(o) for o in estimates["observer"]))
+    figures = {"run": str(run_dir), "gust_onset_t_s": gust_t0, "observers": {}}
+    echo(f"{run_dir}: largest |truth - estimate| (seed 004: dX {SEED_004_TARGETS['dx_threshold_visible_m']:g} m "
+         f"while the threshold is visible, dH and dY 1 m, width 1 m, crosswind 0.5 m/s)")
+    echo(f"{'observer':14s} {'dX thr.vis':>10s} {'dX <1km':>8s} {'dH <2km':>8s} {'dY <2km':>8s} {'W <1km':>8s} "
+         f"{'wind y':>8s} {'dH 100ft':>9s} {'found %':>8s}")
+    for name in names:
+        rows = np.asarray(estimates["observer"]) == name
+        est = {c: np.asarray(estimates[c], dtype=float)[rows] for c in ("dx_m", "dy_m", "dh_m", "width_m")}
+        if len(est["dh_m"]) != len(t):
+            raise ValueError(f"{run_dir}/estimates.csv: {name} has {len(est['dh_m'])} rows for {len(t)} frames")
+        wind_y = np.asarray(estimates["wind_y_mps"], dtype=float)[rows] if "wind_y_mps" in estimates else None
+        row = {"dx_threshold_visible_m": worst(dx_true - est["dx_m"], seen & from_2km),
+               "dx_threshold_visible_from_1km_m": worst(dx_true - est["dx_m"], seen & by_1km),
+               "dh_from_2km_m": worst(dh_true - est["dh_m"], from_2km),
+               "dy_from_2km_m": worst(dy_true - est["dy_m"], from_2km),
+               "width_by_1km_m": worst(float(runway["width_m"]) - est["width_m"], by_1km),
+               "crosswind_after_gust_mps": (worst(wy_true - wind_y, after_gust)
+                                            if wind_y is not None and wy_true is not None else math.nan),
+               "dh_err_100ft_m": error_at_height_of(dh_true, dh_true, est["dh_m"], 100 * FT_TO_M),
+               "found_pct": 100.0 * float(np.mean(np.asarray(measured["found"]) > 0.5))}
+        figures["observers"][name] = json_ready(row)
+        echo(f"{name:14s} {_fmt(row['dx_threshold_visible_m'], 10)} {_fmt(row['dx_threshold_visible_from_1km_m'])} "
+             f"{_fmt(row['dh_from_2km_m'])} {_fmt(row['dy_from_2km_m'])} {_fmt(row['width_by_1km_m'])} "
+             f"{_fmt(row['crosswind_after_gust_mps'])} {_fmt(row['dh_err_100ft_m'], 9)} {row['found_pct']:8.1f}")
+    return figures

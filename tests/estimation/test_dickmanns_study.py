@@ -64,3 +64,47 @@ def test_wind_case_gust_onset_and_crosswind(tmp_path):
     assert math.isfinite(ours["dh_err_100ft_m"]) and abs(ours["dh_err_100ft_m"]) < 0.3
     assert figures["plots"] == [str(tmp_path / "dickmanns-wind.png")]
     assert (tmp_path / "dickmanns-wind.png").stat().st_size > 10_000
+
+
+def test_scoring_a_processed_run_finds_the_planted_errors(tmp_path):
+    """A run folder written here with known errors: each figure is the planted worst error in its window."""
+    import json
+
+    from visland.contracts import MEASUREMENT_COLUMNS, write_csv
+    from visland.estimation.dickmanns_study import score_wind_run
+    n = 101
+    t = np.arange(n) * 0.5                                     # 50 s
+    dx = np.linspace(-4320.0, -320.0, n)                       # 4 km to the threshold
+    dh = -dx * np.tan(np.radians(3.0)) + 10.0
+    wy = np.where(t >= 40.0, 1.0 * np.exp(-(t - 40.0) / 6.0), -1.0)     # gust at 40 s
+    zeros = np.zeros(n)
+    write_csv(tmp_path / "truth.csv", {"t_s": t, "dx_m": dx, "dy_m": zeros, "dh_m": dh, "roll_deg": zeros,
+                                       "pitch_deg": zeros, "dpsi_deg": zeros, "wind_y_runway_mps": wy},
+              ["t_s", "dx_m", "dy_m", "dh_m", "roll_deg", "pitch_deg", "dpsi_deg", "wind_y_runway_mps"])
+    from_2km = dx > -2320.0
+    est_dx = dx - np.where(from_2km, 3.0, 50.0)                 # 3 m inside the window, 50 m outside
+    est_dh = dh - np.where(from_2km, 0.4, 9.0)
+    est_dy = np.where(from_2km, 0.2, 7.0)
+    est_w = 45.0 + np.where(dx > -1320.0, 0.3, 5.0)
+    est_wy = wy + np.where(t > 46.0, 0.05, 2.0)
+    write_csv(tmp_path / "estimates.csv",
+              {"observer": ["dickmanns-4d"] * n, "t_s": t, "dx_m": est_dx, "dy_m": est_dy, "dh_m": est_dh,
+               "width_m": est_w, "dpsi_deg": zeros, "observability": zeros + 1.0, "wind_y_mps": est_wy},
+              ["observer", "t_s", "dx_m", "dy_m", "dh_m", "width_m", "dpsi_deg", "observability", "wind_y_mps"])
+    seen = np.arange(n) % 2 == 0                                # the threshold measured every other frame
+    cols = {c: np.full(n, np.nan) for c in MEASUREMENT_COLUMNS}
+    cols.update(frame=np.arange(n), t_s=t, found=np.ones(n), source=["detection"] * n, reason=[""] * n,
+                confidence=np.ones(n), near_left_u_px=np.where(seen, 10.0, np.nan),
+                near_left_v_px=np.where(seen, 10.0, np.nan), near_right_u_px=np.where(seen, 20.0, np.nan),
+                near_right_v_px=np.where(seen, 10.0, np.nan))
+    write_csv(tmp_path / "measurements.csv", cols, MEASUREMENT_COLUMNS)
+    (tmp_path / "runway.json").write_text(json.dumps({"length_m": 3000.0, "width_m": 45.0, "aim_distance_m": 320.0}))
+    figures = score_wind_run(tmp_path, echo=lambda line: None)
+    assert figures["gust_onset_t_s"] == pytest.approx(40.0)
+    row = figures["observers"]["dickmanns-4d"]
+    assert row["dx_threshold_visible_m"] == pytest.approx(3.0)
+    assert row["dh_from_2km_m"] == pytest.approx(0.4)
+    assert row["dy_from_2km_m"] == pytest.approx(0.2)
+    assert row["width_by_1km_m"] == pytest.approx(0.3)
+    assert row["crosswind_after_gust_mps"] == pytest.approx(0.05)
+    assert row["found_pct"] == pytest.approx(100.0)
