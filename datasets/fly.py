@@ -146,11 +146,13 @@ class StepInputs:
         self._first = None
         self._settled = False
         self.psi_runway_rad = math.nan
-        self._last_weight = 1.0
+        self._window: list = []
 
     def frame(self, row: dict, roll_rad: float, pitch_rad: float, heading_rad: float):
         """Take one frame's measurement row (labels schema + found); return its FeatureSeries."""
-        from visland.estimation.inputs import HEADING_SETTLED_RAD, FeatureSeries, _dF_with_corner_fallback
+        from visland.estimation.inputs import (HEADING_SAMPLE_SETTLED_RAD, HEADING_SETTLED_RAD,
+                                               HEADING_WINDOW_FRAMES, FeatureSeries, _dF_on_horizon,
+                                               _dF_with_corner_fallback, _robust_heading_weights)
         from visland.features import dpsi_from_dF
         table = _Row({k: np.array([v]) for k, v in row.items()})
         features = FeatureSeries.from_table(table)
@@ -159,27 +161,34 @@ class StepInputs:
             pass
         ins = _Ins()
         ins.roll_rad, ins.pitch_rad = np.array([roll_rad]), np.array([pitch_rad])
-        dF = _dF_with_corner_fallback(features, ins, self.camera)[0]
+        # d_F where the edges cross the inertial horizon, else as measured (prepare_inputs' order)
+        dF = _dF_on_horizon(features, ins, self.camera)[0]
+        if not np.isfinite(dF):
+            dF = _dF_with_corner_fallback(features, ins, self.camera)[0]
         dpsi = float(dpsi_from_dF(np.array([dF]), ins.roll_rad, ins.pitch_rad, self.camera)[0]) if np.isfinite(dF) \
             else math.nan
-        near = features.near_uv_px[0]
-        span = math.hypot(near[1, 0] - near[0, 0], near[1, 1] - near[0, 1])
-        if math.isfinite(span) and span > 0:
-            self._last_weight = span * span
         # the runway heading: the weighted circular running mean of heading - dpsi and its standard
-        # error, as estimation.inputs._circular_running_mean / _running_standard_error, kept as sums
+        # error, as estimation.inputs._circular_running_mean / _running_standard_error, kept as sums;
+        # each sample weighted by _robust_heading_weights over the last HEADING_WINDOW_FRAMES samples
+        # (its value for the window's last sample is the offline one for that frame)
         sample = heading_rad - dpsi
+        sample_sigma = math.inf
         if math.isfinite(sample):
-            w = self._last_weight
+            self._window.append(sample)
+            del self._window[:-HEADING_WINDOW_FRAMES]
+            w = 0.0                  # the first sample: no spread known yet
+            if len(self._window) > 1:
+                weights, sigmas = _robust_heading_weights(np.array(self._window))
+                w, sample_sigma = float(weights[-1]), float(sigmas[-1])
             if self._first is None:
                 self._first = sample
             x = (sample - self._first + math.pi) % (2 * math.pi) - math.pi
             self._sums += np.array([w * math.cos(sample), w * math.sin(sample), w, w * x, w * x * x, w * w, 1.0])
         c, s_, sw, swx, swxx, sww, n = self._sums
-        if n >= 2:
+        if n >= 2 and sw > 0 and sww > 0:
             mean = swx / sw
             se = math.sqrt(max(swxx / sw - mean * mean, 0.0) / (sw * sw / sww))
-            if se <= HEADING_SETTLED_RAD:
+            if se <= HEADING_SETTLED_RAD and sample_sigma <= HEADING_SAMPLE_SETTLED_RAD:
                 self._settled = True
         if self._settled:
             self.psi_runway_rad = math.atan2(s_, c)
