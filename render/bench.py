@@ -42,7 +42,24 @@ VARIANTS = (
 
 
 def approach_poses(size: int, n_frames: int, scenario_name: str = "thesis-1"):
-    """``n_frames`` camera poses spread from the start of the approach to 100 ft, and the camera and runway."""
+    """``n_frames`` camera poses spread from the start of the approach to 100 ft, and the camera and runway.
+
+    Parameters
+    ----------
+    size : int
+        Frame side, pixels (the SPEC camera scaled).
+    n_frames : int
+        Number of poses.
+    scenario_name : str, default "thesis-1"
+        The built-in scenario flown.
+
+    Returns
+    -------
+    poses : list of (ndarray, ndarray)
+        ``(p_runway_m (3,), R_camera_from_runway (3, 3))`` per frame.
+    camera : visland.camera.CameraModel
+    runway : visland.runway.Runway
+    """
     from visland.camera import CameraModel
     from visland.features import batch_R_camera_from_runway
     from visland.flight import FT_TO_M
@@ -91,7 +108,28 @@ def _time_renders(params, camera, runway, poses, warmup=1, png_level=None, folde
 
 def run_render_bench(size: int = 2048, n_frames: int = 9, png_compression: int = 1, variants: bool = True,
                      png_levels=(0, 1, 3, 6), out=print) -> dict:
-    """Run the benchmark, print a table with ``out`` and return the figures (also printed as JSON last)."""
+    """Run the benchmark, print a table with ``out`` and return the figures (also printed as JSON last).
+
+    Parameters
+    ----------
+    size : int, default 2048
+        Square frame side, pixels.
+    n_frames : int, default 9
+        Frames rendered along the approach.
+    png_compression : int, default 1
+        PNG compression level of the frames written.
+    variants : bool, default True
+        Also time the scene options (msaa, variety...).
+    png_levels : sequence of int
+        PNG levels whose encoding time is measured.
+    out : callable, default print
+        Where the table's lines go.
+
+    Returns
+    -------
+    dict
+        The figures (seconds per frame and per step).
+    """
     from visland.render.params import SceneParams
     load_before = os.getloadavg()
     poses, camera, runway = approach_poses(size, n_frames)

@@ -116,9 +116,21 @@ def gl_camera_pose(p_runway_m, R_camera_from_runway) -> np.ndarray:
 def gl_view_matrix(p_runway_m, R_camera_from_runway) -> np.ndarray:
     """``T_G_from_runway`` (4, 4): the OpenGL view matrix, computed element by element.
 
-    ``R_G_from_runway = diag(1, -1, -1) R_camera_from_runway`` and ``t = -R_G_from_runway p``.
+    ``R_G_from_runway = diag(1, -1, -1) R_camera_from_runway`` and ``t = -R_G_from_runway p``
+    (OpenGL's camera looks along -z with y up; OpenCV's along +z with y down).
     Written without BLAS or LAPACK so that every process gets the same bits (their SIMD paths
     depend on memory alignment), which keeps resumed datasets byte-identical.
+
+    Parameters
+    ----------
+    p_runway_m : array_like, shape (3,)
+        Camera centre in the runway frame R, metres.
+    R_camera_from_runway : array_like, shape (3, 3)
+        Rotation from R to the OpenCV camera frame.
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
     """
     p = [float(v) for v in np.asarray(p_runway_m, dtype=float).reshape(3)]
     R = np.asarray(R_camera_from_runway, dtype=float)
@@ -135,8 +147,12 @@ def check_opengl(libraries=("libEGL.so.1", ("libOpenGL.so.0", "libGL.so.1"))) ->
     """Raise :class:`RenderingUnavailable` if the EGL and OpenGL system libraries cannot be loaded.
 
     Checked with ctypes, before PyOpenGL touches them (importing ``OpenGL.EGL`` ahead of
-    pyrender's EGL platform breaks PyOpenGL 3.1). Each entry of ``libraries`` is a file name
-    or a tuple of alternatives.
+    pyrender's EGL platform breaks PyOpenGL 3.1).
+
+    Parameters
+    ----------
+    libraries : sequence
+        Each entry a library file name, or a tuple of alternatives of which one must load.
     """
     import ctypes
     if os.environ.get("PYOPENGL_PLATFORM", "egl") != "egl":
@@ -293,11 +309,21 @@ def _make_renderer_class():
 
 
 def mipmap_chain(image: np.ndarray) -> list:
-    """Mipmap levels of ``image`` (rows, cols, channels) uint8 down to 1x1, by area averaging.
+    """Mipmap levels of ``image`` down to 1x1, by area averaging.
 
     Computed here rather than by ``glGenerateMipmap``, whose llvmpipe results differ from one
     process to the next (and would break byte-identical datasets). Level ``k`` has the OpenGL
     size ``max(1, floor(size / 2^k))``.
+
+    Parameters
+    ----------
+    image : ndarray, shape (rows, cols, channels), uint8
+        Level 0.
+
+    Returns
+    -------
+    list of ndarray
+        Level 0 first.
     """
     import cv2
     levels = [np.ascontiguousarray(image)]
@@ -311,10 +337,21 @@ def mipmap_chain(image: np.ndarray) -> list:
 def make_texture(image_t_rows: np.ndarray, wrap: int, trilinear: bool = True):
     """A pyrender texture with visland's own mipmaps and byte-packed upload.
 
-    ``image_t_rows`` (rows, cols, 3) uint8 has its row index growing with the texture
-    coordinate t (OpenGL order). pyrender's own upload leaves ``GL_UNPACK_ALIGNMENT`` at 4
-    (rows of odd byte length come out sheared) and calls ``glGenerateMipmap``. ``trilinear``
-    False samples the nearest mipmap level (half the cost; for detail textures).
+    pyrender's own upload leaves ``GL_UNPACK_ALIGNMENT`` at 4 (rows of odd byte length come
+    out sheared) and calls ``glGenerateMipmap``.
+
+    Parameters
+    ----------
+    image_t_rows : ndarray, shape (rows, cols, 3), uint8
+        The texture, its row index growing with the texture coordinate t (OpenGL order).
+    wrap : int
+        OpenGL wrap mode (``GL_REPEAT``, ``GL_CLAMP_TO_EDGE``...).
+    trilinear : bool, default True
+        False samples the nearest mipmap level (half the cost; for detail textures).
+
+    Returns
+    -------
+    pyrender.Texture
     """
     import pyrender
     from OpenGL import GL

@@ -67,7 +67,26 @@ TDZ_STRIPE_SPACING_M = 1.5
 
 @dataclass(frozen=True)
 class MarkingLayout:
-    """White rectangles ``(n, 4)`` as ``x0, x1, y0, y1`` in metres (runway frame) and what they are."""
+    """White rectangles as ``x0, x1, y0, y1`` in metres (runway frame R) and what they are.
+
+    Attributes
+    ----------
+    rectangles_m : ndarray, shape (n, 4)
+        ``x0, x1, y0, y1`` of each painted rectangle, metres in R.
+    kinds : tuple of str
+        What each rectangle is (threshold stripe, designator, centre line, ...).
+    designators : tuple of str
+        ``(near, far)`` runway numbers as painted, e.g. ``("04", "22")``.
+    aiming_point_start_m : float
+        Where the aiming point marking starts past the threshold, metres.
+    touchdown_zone_end_m : float
+        Where the touchdown zone markings end, metres.
+    polygons : tuple
+        Painted polygons ``(colour, (n, 2) array of x, y)``: displaced-threshold arrows (white),
+        blast pad chevrons (yellow); all at x < 0, before the threshold.
+    pre_threshold_m : float, default 0
+        Length of the pavement before the threshold (displaced threshold or blast pad), metres.
+    """
 
     rectangles_m: np.ndarray
     kinds: tuple
@@ -86,7 +105,18 @@ class MarkingLayout:
 
 
 def designator_number(heading_deg: float) -> int:
-    """Runway number from its heading: heading / 10 rounded, 36 instead of 0."""
+    """Runway number from its heading: heading / 10 rounded, 36 instead of 0.
+
+    Parameters
+    ----------
+    heading_deg : float
+        Landing direction, degrees from north.
+
+    Returns
+    -------
+    int
+        1 to 36.
+    """
     number = int(math.floor(heading_deg / 10.0 + 0.5)) % 36
     return 36 if number == 0 else number
 
@@ -213,9 +243,23 @@ def runway_markings(runway: Runway, style: str = "icao", threshold_stripes: int 
                     pre_threshold_m: float = 150.0) -> MarkingLayout:
     """All markings of ``runway`` (both ends, centre line, side stripes) in the runway frame R.
 
-    ``style`` is a marking set (module docstring); ``threshold_stripes`` 0 takes Annex 14's count
-    for the width; ``pre_threshold_m`` is the length of the displaced-threshold pavement or of
-    the blast pad (styles ``displaced`` and ``blast_pad`` only).
+    Parameters
+    ----------
+    runway : visland.runway.Runway
+        Its size (and heading, for the designators).
+    style : str, default "icao"
+        A marking set (module docstring).
+    threshold_stripes : int, default 0
+        Number of threshold stripes; 0 takes Annex 14's count for the width.
+    side_stripes : bool, default True
+        Paint the runway side stripes.
+    pre_threshold_m : float, default 150
+        Length of the displaced-threshold pavement or of the blast pad, metres (styles
+        ``displaced`` and ``blast_pad`` only).
+
+    Returns
+    -------
+    MarkingLayout
     """
     L, W = runway.length_m, runway.width_m
     near_number = designator_number(runway.heading_deg)

@@ -34,6 +34,17 @@ def clip_planes(height_above_ground_m: float, max_structure_height_m: float) -> 
     plane sits at half that clearance (at least 0.5 m); the far plane lies beyond the sky dome.
     No two surfaces overlap in the scene (see :mod:`visland.render.scene`), so depth precision
     only has to separate buildings from the ground and the ground from the sky.
+
+    Parameters
+    ----------
+    height_above_ground_m : float
+        Camera height above the runway plane, metres.
+    max_structure_height_m : float
+        Height of the tallest structure in the scene, metres.
+
+    Returns
+    -------
+    near_m, far_m : float
     """
     clearance = height_above_ground_m - max_structure_height_m
     return float(np.clip(0.5 * clearance, 0.5, 500.0)), ZFAR_M

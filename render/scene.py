@@ -54,7 +54,19 @@ class Region:
 
 @dataclass(frozen=True)
 class AirportLayout:
-    """Paved regions (highest priority wins a grid cell) and buildings ``(x0, x1, y0, y1, height, rgb)``."""
+    """Paved regions (highest priority wins a grid cell) and buildings, in the runway frame R.
+
+    Attributes
+    ----------
+    regions : tuple of Region
+        Runway, taxiways, apron, roads: ``rect = (x0, x1, y0, y1)`` in metres.
+    buildings : tuple
+        ``(x0, x1, y0, y1, height, rgb)`` each, metres.
+    grass_rect : tuple
+        ``(x0, x1, y0, y1)`` of the mown airport grass, metres.
+    runway_tile_edges_m : ndarray, shape (n_tiles + 1,)
+        Where the runway's texture tiles start and end along x, metres.
+    """
 
     regions: tuple
     buildings: tuple
@@ -71,6 +83,23 @@ def airport_layout(runway: Runway, distractors: bool = True, taxiways: str = "st
     taxiway, apron or building (roads stay). ``second_runway`` adds a parallel runway 400 m to
     the left, its threshold 600 m before ours. ``pre_threshold_m`` > 0 paves ``[-pre, 0]`` at
     the runway's width (displaced threshold or blast pad).
+
+    Parameters
+    ----------
+    runway : visland.runway.Runway
+        Its length and width.
+    distractors : bool, default True
+        Taxiways, apron, buildings and roads around the runway (False: the runway alone).
+    taxiways : str, default "standard"
+        ``standard``, ``near_threshold`` or ``none``.
+    second_runway : bool, default False
+        Add the parallel runway.
+    pre_threshold_m : float, default 0
+        Paved length before the threshold, metres.
+
+    Returns
+    -------
+    AirportLayout
     """
     L, W = runway.length_m, runway.width_m
     n_tiles = max(1, int(math.ceil(L / RUNWAY_TILE_M)))
@@ -143,7 +172,17 @@ def airport_layout(runway: Runway, distractors: bool = True, taxiways: str = "st
 
 @dataclass
 class SceneHandles:
-    """The pyrender scene and the node that must follow the camera."""
+    """The pyrender scene and the node that must follow the camera.
+
+    Attributes
+    ----------
+    scene : pyrender.Scene
+        The airport, in the runway frame R.
+    sky_node : pyrender.Node
+        The sky dome, moved to the camera at each frame.
+    max_structure_height_m : float
+        Height of the tallest building, metres (for the clipping planes).
+    """
 
     scene: object
     sky_node: object
@@ -223,6 +262,17 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     """Build the airport scene of ``runway`` as a pyrender Scene in the runway frame.
 
     Textures are generated from ``params.seed`` (same seed, same scene, in every process).
+
+    Parameters
+    ----------
+    runway : visland.runway.Runway
+        The runway (size; markings from ``params``).
+    params : SceneParams
+        How the scene looks.
+
+    Returns
+    -------
+    SceneHandles
     """
     import pyrender
     import trimesh

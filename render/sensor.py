@@ -22,7 +22,19 @@ _MARGIN = 97  # offsets per axis (prime, so horizontal and vertical shifts do no
 
 
 def apply_blur(rgb: np.ndarray, sigma_px: float) -> np.ndarray:
-    """Gaussian optical blur of ``sigma_px`` pixels (``rgb`` (H, W, 3) uint8); returns a new image."""
+    """Gaussian optical blur of ``sigma_px`` pixels; returns a new image.
+
+    Parameters
+    ----------
+    rgb : ndarray, shape (H, W, 3), uint8
+        The rendered frame.
+    sigma_px : float
+        Standard deviation of the blur, pixels (0: unchanged copy).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3), uint8
+    """
     import cv2
     if sigma_px <= 0:
         return rgb
@@ -31,13 +43,23 @@ def apply_blur(rgb: np.ndarray, sigma_px: float) -> np.ndarray:
 
 
 def distortion_maps(camera) -> tuple[np.ndarray, np.ndarray]:
-    """``cv2.remap`` maps (float32, (H, W)) from the pinhole render to the distorted frame of ``camera``.
+    """``cv2.remap`` maps from the pinhole render to the distorted frame of ``camera``.
 
     ``frame[v_d, u_d] = pinhole[map_v, map_u]`` with ``(map_u, map_v) =
     camera.undistort_pixels((u_d, v_d))``: each frame pixel takes the pinhole pixel its ray
     goes through (the inverse of :meth:`visland.camera.CameraModel.undistortion_maps`), so a
     pinhole label ``(u, v)`` sits at ``camera.distort_pixels((u, v))`` in the frame. Rays that
     the pinhole image does not hold (or Newton does not invert) read black.
+
+    Parameters
+    ----------
+    camera : visland.camera.CameraModel
+        A camera with lens distortion.
+
+    Returns
+    -------
+    map_u, map_v : ndarray, shape (H, W), float32
+        Pinhole pixel coordinates (SPEC convention) of each frame pixel.
     """
     v, u = np.mgrid[0:camera.height, 0:camera.width].astype(float)
     uv = camera.undistort_pixels(np.stack([u, v], axis=-1))
@@ -46,33 +68,91 @@ def distortion_maps(camera) -> tuple[np.ndarray, np.ndarray]:
 
 
 def apply_distortion(rgb: np.ndarray, maps) -> np.ndarray:
-    """The distorted frame from the pinhole render ``rgb`` with :func:`distortion_maps` ``maps``."""
+    """The distorted frame from the pinhole render ``rgb`` with :func:`distortion_maps` ``maps``.
+
+    Parameters
+    ----------
+    rgb : ndarray, shape (H, W, 3), uint8
+        The pinhole render.
+    maps : tuple of ndarray
+        ``(map_u, map_v)`` from :func:`distortion_maps` (bilinear resampling).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3), uint8
+    """
     import cv2
     return cv2.remap(rgb, maps[0], maps[1], interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                      borderValue=(0, 0, 0))
 
 
 def vignetting_gain(height: int, width: int, strength: float) -> np.ndarray:
-    """Gain (H, W) float32: 1 at the centre, ``1 - strength`` at the corners (cos^4-like, radial)."""
+    """Gain: 1 at the centre, ``1 - strength`` at the corners (cos^4-like, radial).
+
+    Parameters
+    ----------
+    height, width : int
+        Frame size, pixels.
+    strength : float
+        Light lost at the corners, 0 to 0.6.
+
+    Returns
+    -------
+    ndarray, shape (height, width), float32
+    """
     v, u = np.mgrid[0:height, 0:width].astype(np.float32)
     r2 = ((u - (width - 1) / 2) ** 2 + (v - (height - 1) / 2) ** 2) / (((width - 1) / 2) ** 2 + ((height - 1) / 2) ** 2)
     return (1.0 - np.float32(strength) * r2 ** 2).astype(np.float32)
 
 
 def apply_gain(rgb: np.ndarray, gain: np.ndarray) -> np.ndarray:
-    """``rgb`` (H, W, 3) uint8 times ``gain`` (H, W), rounded and saturated."""
+    """``rgb`` times ``gain``, rounded and saturated.
+
+    Parameters
+    ----------
+    rgb : ndarray, shape (H, W, 3), uint8
+        The frame.
+    gain : ndarray, shape (H, W)
+        Per-pixel gain (:func:`vignetting_gain`).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3), uint8
+    """
     return np.clip(np.rint(rgb.astype(np.float32) * gain[..., None]), 0, 255).astype(np.uint8)
 
 
 def to_monochrome(rgb: np.ndarray) -> np.ndarray:
-    """Grey levels (Rec. 601 luma) replicated to three equal channels, (H, W, 3) uint8."""
+    """Grey levels (Rec. 601 luma) replicated to three equal channels.
+
+    Parameters
+    ----------
+    rgb : ndarray, shape (H, W, 3), uint8
+        The frame, RGB.
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3), uint8
+    """
     import cv2
     grey = cv2.cvtColor(np.ascontiguousarray(rgb), cv2.COLOR_RGB2GRAY)
     return np.repeat(grey[..., None], 3, axis=-1)
 
 
 def jpeg_round_trip(rgb: np.ndarray, quality: int) -> np.ndarray:
-    """``rgb`` encoded as JPEG at ``quality`` (5-100) and decoded again (blocking, ringing)."""
+    """``rgb`` encoded as JPEG at ``quality`` and decoded again (blocking, ringing).
+
+    Parameters
+    ----------
+    rgb : ndarray, shape (H, W, 3), uint8
+        The frame, RGB.
+    quality : int
+        JPEG quality, 5 to 100.
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3), uint8
+    """
     import cv2
     ok, data = cv2.imencode(".jpg", np.ascontiguousarray(rgb[..., ::-1]), [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
     if not ok:

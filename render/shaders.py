@@ -213,7 +213,19 @@ void main()
 
 
 def sun_direction_runway(params: SceneParams, runway_heading_deg: float) -> np.ndarray:
-    """Unit vector towards the sun in the runway frame R (z down), (3,)."""
+    """Unit vector towards the sun in the runway frame R (z down).
+
+    Parameters
+    ----------
+    params : SceneParams
+        Its sun azimuth and elevation (degrees, azimuth from north).
+    runway_heading_deg : float
+        Runway heading, degrees from north.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+    """
     az = math.radians(params.sun_azimuth_deg)
     el = math.radians(params.sun_elevation_deg)
     towards_sun_ned = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), -math.sin(el)])
@@ -221,7 +233,17 @@ def sun_direction_runway(params: SceneParams, runway_heading_deg: float) -> np.n
 
 
 def sky_colours(params: SceneParams) -> tuple[np.ndarray, np.ndarray]:
-    """Zenith and horizon sky colours (linear 0-1 RGB as displayed) for the scene's visibility."""
+    """Zenith and horizon sky colours (linear 0-1 RGB as displayed) for the scene's visibility.
+
+    Parameters
+    ----------
+    params : SceneParams
+        Visibility, cloud cover and lighting.
+
+    Returns
+    -------
+    zenith, horizon : ndarray, shape (3,)
+    """
     zenith = np.array([0.30, 0.48, 0.78])
     horizon_clear = np.array([0.73, 0.81, 0.90])
     grey = np.array([0.80, 0.82, 0.84])
@@ -244,7 +266,22 @@ def _vec(v) -> str:
 
 
 def write_shaders(folder, params: SceneParams, runway_heading_deg: float) -> Path:
-    """Write ``flat.vert`` and ``flat.frag`` for ``params`` into ``folder``; returns the folder."""
+    """Write ``flat.vert`` and ``flat.frag`` for ``params`` into ``folder``.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Where pyrender will read the shaders.
+    params : SceneParams
+        Sun, haze, sky and lighting.
+    runway_heading_deg : float
+        Runway heading, degrees (places the sun in the runway frame).
+
+    Returns
+    -------
+    Path
+        ``folder``.
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     sun = sun_direction_runway(params, runway_heading_deg)

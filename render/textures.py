@@ -50,6 +50,7 @@ def tileable_noise(shape, rng: np.random.Generator, beta: float = 2.0, cutoff: f
     Parameters
     ----------
     shape : (rows, cols)
+    rng : seeded ``numpy.random.Generator`` of the white noise.
     beta : spectral slope (0 white, 2 brownian-like, larger smoother).
     cutoff : frequencies below this (cycles per image) are removed.
     """
@@ -79,7 +80,19 @@ def _to_uint8(image) -> np.ndarray:
 
 
 def grass_detail(rng: np.random.Generator, size: int = 1024) -> np.ndarray:
-    """Tileable grass detail (neutral grey mean 128 with a slight green/yellow play), (size, size, 3)."""
+    """Tileable grass detail (neutral grey mean 128 with a slight green/yellow play).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Seeded generator (same seed, same texture in every process).
+    size : int, default 1024
+        Texels per side.
+
+    Returns
+    -------
+    ndarray, shape (size, size, 3), uint8
+    """
     coarse = tileable_noise((size, size), rng, beta=2.6)
     fine = tileable_noise((size, size), rng, beta=0.6)
     blades = tileable_noise((size, size), rng, beta=1.2, cutoff=size / 8)
@@ -92,7 +105,18 @@ def grass_detail(rng: np.random.Generator, size: int = 1024) -> np.ndarray:
 def pavement_detail(rng: np.random.Generator, size: int = 512, joints_every_px: int = 0) -> np.ndarray:
     """Tileable pavement grain, neutral grey mean ~128, (size, size, 3).
 
-    ``joints_every_px > 0`` draws darker slab joints (concrete) every that many texels.
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Seeded generator of the grain.
+    size : int, default 512
+        Texels per side.
+    joints_every_px : int, default 0
+        When positive, darker slab joints (concrete) every that many texels.
+
+    Returns
+    -------
+    ndarray, shape (size, size, 3), uint8
     """
     grain = tileable_noise((size, size), rng, beta=0.3)
     mottle = tileable_noise((size, size), rng, beta=2.8)
@@ -110,7 +134,19 @@ def pavement_detail(rng: np.random.Generator, size: int = 512, joints_every_px: 
 
 
 def cloud_texture(rng: np.random.Generator, size: int = 512) -> np.ndarray:
-    """Tileable cloud density in [0, 255] (single channel replicated to RGB), (size, size, 3)."""
+    """Tileable cloud density in [0, 255] (single channel replicated to RGB).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+        Seeded generator of the density.
+    size : int, default 512
+        Side in texels.
+
+    Returns
+    -------
+    ndarray, shape (size, size, 3), uint8
+    """
     density = tileable_noise((size, size), rng, beta=3.0) + 0.35 * tileable_noise((size, size), rng, beta=1.8)
     density = np.round((density - density.min()) / (density.max() - density.min()), 5)
     return _to_uint8(np.repeat((density * 255.0)[..., None], 3, axis=-1))
@@ -142,6 +178,7 @@ def fields_texture(rng: np.random.Generator, size: int, extent_m: float, centre_
 
     Parameters
     ----------
+    rng : seeded ``numpy.random.Generator`` of the pattern.
     size : texels per side.
     extent_m : metres covered per side; texel (row, col) centre is at
         ``x = x_c - extent/2 + (col + 0.5) extent/size``, ``y = y_c - extent/2 + (row + 0.5) extent/size``.
@@ -207,6 +244,20 @@ def coverage_of_polygons(polygons_m, x_edges_m, y_edges_m, oversample: int = 4) 
     Rasterised with ``cv2.fillPoly`` at ``oversample`` x ``oversample`` sub-texels (sub-pixel
     vertices, 8 fractional bits) and averaged: the coverage is exact to about ``1 / oversample``
     of a texel along the edges. Texels must be evenly spaced.
+
+    Parameters
+    ----------
+    polygons_m : sequence of ndarray, shape (k, 2)
+        Polygon vertices ``(x, y)`` in the runway frame, metres.
+    x_edges_m, y_edges_m : ndarray
+        Texel edges along x (cols + 1) and y (rows + 1), metres, evenly spaced.
+    oversample : int, default 4
+        Sub-texels per texel side.
+
+    Returns
+    -------
+    ndarray, shape (rows, cols)
+        Coverage in [0, 1].
     """
     import cv2
     rows, cols = len(y_edges_m) - 1, len(x_edges_m) - 1
@@ -232,7 +283,8 @@ def coverage_of_rectangles(rects_m, x_edges_m, y_edges_m) -> np.ndarray:
     Parameters
     ----------
     rects_m : (n, 4) ``x0, x1, y0, y1``.
-    x_edges_m : (cols + 1,) texel edges along x; y_edges_m : (rows + 1,) along y.
+    x_edges_m : (cols + 1,) texel edges along x.
+    y_edges_m : (rows + 1,) texel edges along y.
 
     Returns
     -------
@@ -302,6 +354,20 @@ def runway_patches(runway: Runway, rng: np.random.Generator, x_from_m: float = 0
 
     About one patch per 60 m, 6-80 m long, a lane of the runway or its full width, darker
     (fresh asphalt) or lighter (concrete slabs); some start right at the threshold.
+
+    Parameters
+    ----------
+    runway : visland.runway.Runway
+        Its length and width.
+    rng : numpy.random.Generator
+        Seeded generator of the patches.
+    x_from_m : float, default 0
+        Patches start at or after this distance past the threshold, metres.
+
+    Returns
+    -------
+    ndarray, shape (k, 5)
+        ``x0, x1, y0, y1`` (metres in R) and ``tone`` of each patch.
     """
     L, W = runway.length_m, runway.width_m
     n = max(4, int((L - x_from_m) / 60.0))
@@ -335,6 +401,28 @@ def pre_threshold_tile(x0_m: float, x1_m: float, runway: Runway, layout: Marking
 
     Same orientation as :func:`runway_tile`; ``tone`` multiplies the pavement colour (a blast pad
     is often of another, older surface).
+
+    Parameters
+    ----------
+    x0_m, x1_m : float
+        The tile's extent, metres in R (``x0_m < x1_m <= 0``).
+    runway : visland.runway.Runway
+        Its width.
+    layout : MarkingLayout
+        Its ``polygons`` (arrows or chevrons).
+    surface : str
+        The pavement (``asphalt``, ``concrete``, ``patched``).
+    tone : float
+        Multiplies the pavement colour.
+    texel_m : float
+        Texel size, metres.
+    rng : numpy.random.Generator
+        Seeded generator of the grain.
+
+    Returns
+    -------
+    ndarray, shape (rows, cols, 3), uint8
+        The pavement, arrows and chevrons painted.
     """
     W = runway.width_m
     cols = max(2, int(math.ceil((x1_m - x0_m) / texel_m)))
@@ -359,6 +447,33 @@ def runway_tile(x0_m: float, x1_m: float, runway: Runway, layout: MarkingLayout,
     Columns run along x from ``x0_m`` (texel edges evenly spaced), rows along y from the left
     edge ``-W/2`` (row index increases with y and with the texture coordinate t).
     ``flat`` gives plain white pavement and no markings (label checks).
+
+    Parameters
+    ----------
+    x0_m, x1_m : float
+        The tile's extent along the runway, metres in R.
+    runway : visland.runway.Runway
+        Its width.
+    layout : MarkingLayout
+        The markings to paint.
+    fields : RunwayFields
+        Stains, rubber and wear over the whole runway (sampled seamlessly per tile).
+    surface : str
+        ``asphalt``, ``concrete`` or ``patched``.
+    wear, rubber : float
+        Marking wear and rubber deposits, 0 to 1.
+    texel_m : float
+        Texel size, metres.
+    rng : numpy.random.Generator
+        Seeded generator of the grain.
+    flat : bool, default False
+        Plain white pavement, no markings.
+    patches : ndarray, shape (k, 5), optional
+        Repair patches (:func:`runway_patches`).
+
+    Returns
+    -------
+    ndarray, shape (rows, cols, 3), uint8
     """
     W = runway.width_m
     cols = max(2, int(math.ceil((x1_m - x0_m) / texel_m)))
@@ -407,6 +522,25 @@ def strip_texture(kind: str, width_m: float, rng: np.random.Generator, texel_m: 
     edge lines and a 3 m / 9 m dashed centre line) or ``"runway"`` (a second runway: concrete,
     side stripes, dashed centre line). Rows span the width from one edge to the
     other, columns one ``period_m`` along the strip (the texture repeats along it).
+
+    Parameters
+    ----------
+    kind : str
+        ``"taxiway"``, ``"road"`` or ``"runway"``.
+    width_m : float
+        The strip's width, metres.
+    rng : numpy.random.Generator
+        Seeded generator of the grain.
+    texel_m : float, default 0.08
+        Texel size, metres.
+    period_m : float, default 12
+        Length of one period, metres.
+    flat : bool, default False
+        Plain colours (label checks).
+
+    Returns
+    -------
+    ndarray, shape (rows, cols, 3), uint8
     """
     rows = max(4, int(math.ceil(width_m / texel_m)))
     cols = max(4, int(math.ceil(period_m / texel_m)))

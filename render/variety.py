@@ -23,7 +23,15 @@ RUNWAY_WIDTH_RANGE_M = (23.0, 60.0)
 
 
 class Variety(tuple):
-    """``(scene, runway_length_m, runway_width_m)`` of one draw."""
+    """``(scene, runway_length_m, runway_width_m)`` of one draw.
+
+    Parameters
+    ----------
+    scene : SceneParams
+        The drawn scene.
+    runway_length_m, runway_width_m : float
+        The drawn runway size, metres.
+    """
 
     __slots__ = ()
 
@@ -36,10 +44,18 @@ class Variety(tuple):
 
 
 def draw_variety(seed: int, base: SceneParams | None = None) -> Variety:
-    """Draw a runway size and a scene from ``seed`` (a non-negative integer).
+    """Draw a runway size and a scene from ``seed``.
 
-    ``base`` supplies what is not drawn (texel size, anisotropy, msaa); the scene's own
-    texture seed is ``seed``.
+    Parameters
+    ----------
+    seed : int
+        Non-negative; also the scene's own texture seed.
+    base : SceneParams, optional
+        Supplies what is not drawn (texel size, anisotropy, msaa).
+
+    Returns
+    -------
+    Variety
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"variety seed must be a non-negative integer, got {seed!r}")

@@ -25,7 +25,10 @@ DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.clocks", "vi
                       "visland.limits", "visland.params", "visland.progress", "visland.runway", "visland.scenarios",
                       "visland.sensors", "visland.simulate", "visland.structure_mask", "visland.telemetry_map",
                       "visland.userfiles",
-                      "visland.render.params", "visland.tracking.anchoring", "visland.tracking.bench",
+                      "visland.render.bench", "visland.render.glview", "visland.render.markings",
+                      "visland.render.params", "visland.render.renderer", "visland.render.scene",
+                      "visland.render.sensor", "visland.render.shaders", "visland.render.textures",
+                      "visland.render.variety", "visland.tracking.anchoring", "visland.tracking.bench",
                       "visland.tracking.measurements", "visland.tracking.motion", "visland.tracking.params",
                       "visland.tracking.rigid", "visland.tracking.run", "visland.tracking.synthetic",
                       "visland.tracking.template", "visland.tracking.tracker")
