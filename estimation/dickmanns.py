@@ -506,7 +506,7 @@ def _threshold_points(points_yv, R_runway_from_camera) -> tuple:
     (thesis 3.23): the ray ``(y_v1, y_v2, 1)`` in runway axes turned into the camera, ``R^T ray``."""
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R_runway_from_camera
     out = []
-    for y1, y2 in points_yv.tolist():
+    for y1, y2 in (points_yv.tolist() if isinstance(points_yv, np.ndarray) else points_yv):
         c2 = r02 * y1 + r12 * y2 + r22
         out.append(((r00 * y1 + r10 * y2 + r20) / c2, (r01 * y1 + r11 * y2 + r21) / c2))
     return out
@@ -672,22 +672,22 @@ class Dickmanns4D(Observer):
         self._pending_s += dt_s
         t = float(inp.t_s)
         if measurement is not None or t - self._t_update >= p.inertial_update_interval_s - 1e-9:
-            self._propagate_covariance(omega1)
-            self._update(inp, measurement)
+            self._propagate_covariance(omega1, x)
+            self._update(inp, measurement, x)
             self._t_update = t
         return Estimate(t_s=t, dh_m=1.0 / self._x[_ETA], observability=self._observability,
                         coasting=measurement is None, state=self._get_state())
 
-    def _propagate_covariance(self, omega_runway_rps) -> None:
-        """``P <- F_d P F_d^T + Q T`` over the pending time ``T`` (class docstring)."""
+    def _propagate_covariance(self, omega_runway_rps, x) -> None:
+        """``P <- F_d P F_d^T + Q T`` over the pending time ``T`` (class docstring); ``x`` the mean as
+        a list of floats."""
         p = self.params
         T = self._pending_s
         if T <= 0.0:
             return
-        x = self._x
         Fd = _I12 + state_jacobian(x, omega_runway_rps, self._with_wind) * T
         Q = self._Q_base.copy()
-        eta = float(x[_ETA])
+        eta = x[_ETA]
         q_pos = (p.q_position * eta) ** 2                     # position noise in the ratio coordinates
         Q[_XI, _XI] += q_pos
         Q[_ZETA, _ZETA] += q_pos
@@ -699,13 +699,15 @@ class Dickmanns4D(Observer):
         self._P = Fd @ self._P @ Fd.T + Q * T
         self._pending_s = 0.0
 
-    def _update(self, inp: ObserverInput, measurement) -> None:
+    def _update(self, inp: ObserverInput, measurement, s) -> None:
+        """One joint update (class docstring); ``s`` the predicted mean as a list of floats."""
         p = self.params
-        s = self._x.tolist()
         tas = inp.tas_mps
         with_air = self._with_wind and math.isfinite(tas)
         with_vision = measurement is not None
-        with_threshold = with_vision and inp.points_yv is not None and bool(np.isfinite(inp.points_yv).all())
+        points = inp.points_yv.tolist() if with_vision and inp.points_yv is not None else None
+        with_threshold = points is not None and math.isfinite(points[0][0] + points[0][1] + points[1][0]
+                                                              + points[1][1])
         n_diag = 5 if with_air else 3
         m_total = n_diag + ((8 if with_threshold else 6) if with_vision else 0)
         H = np.zeros((m_total, N_STATES))
@@ -730,7 +732,7 @@ class Dickmanns4D(Observer):
                 z[2 * k], z[2 * k + 1] = _aligned(float(measurement[k, 1]), float(measurement[k, 0]), h[2 * k])
             k = 2
             if with_threshold:
-                (a0, a1), (b0, b1) = _threshold_points(inp.points_yv, R_rc)
+                (a0, a1), (b0, b1) = _threshold_points(points, R_rc)
                 theta, rho = _theta_rho(a1 - b1, b0 - a0, a0 * b1 - a1 * b0)
                 z[4], z[5] = _aligned(theta, rho, h[4])
                 k = 3
