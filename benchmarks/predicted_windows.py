@@ -21,7 +21,12 @@ Usage::
     nice .venv/bin/python benchmarks/predicted_windows.py DATASET [--max-frames N] [--skip K]
 
 ``--skip K`` drops K-1 frames of every K (a lower frame rate: larger motion between frames, where
-the detector's own prediction, which ignores the translation, is weakest).
+the detector's own prediction, which ignores the translation, is weakest; beyond ``hold_s`` it
+drops its last detection and searches the whole frame, while the filter still predicts).
+
+Measured (README "Search windows placed by the filter"): 512 px dickmanns-wind at 5 Hz with
+``--skip 10`` (2 s between frames): the filter's windows track 13 of 23 found frames (own: 0),
+detector median 207 vs 419 ms.
 """
 from __future__ import annotations
 
