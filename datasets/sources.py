@@ -55,7 +55,15 @@ class FrameSource:
 
 
 class FolderSource(FrameSource):
-    """A SPEC frame folder (see :class:`visland.folder.FrameFolder`)."""
+    """A SPEC frame folder (see :class:`visland.folder.FrameFolder`).
+
+    Parameters
+    ----------
+    root : str or Path
+        The folder.
+    camera, telemetry, frames_csv, fps, time_offset_s
+        As in :func:`open_source`, passed to :class:`visland.folder.FrameFolder`.
+    """
 
     def __init__(self, root, camera=None, telemetry=None, frames_csv=None, fps=None, time_offset_s=0.0):
         self.folder = FrameFolder(root, camera=camera, telemetry=telemetry, frames_csv=frames_csv, fps=fps,
@@ -95,6 +103,13 @@ class VideoSource(FrameSource):
     else from ``fps`` if given, else from the container's timestamps: a video of constant frame
     rate gives ``k / fps`` exactly, one of variable frame rate (a recorder that drops or delays
     frames) each frame's own presentation time. ``timing`` says which, in one sentence.
+
+    Parameters
+    ----------
+    path : str or Path
+        The video file.
+    camera, telemetry, frames_csv, fps, time_offset_s
+        As in :func:`open_source`; files not given are looked for beside the video.
     """
 
     def __init__(self, path, camera=None, telemetry=None, frames_csv=None, fps=None, time_offset_s=0.0):
@@ -176,7 +191,15 @@ class VideoSource(FrameSource):
 
 class LabelsSource(FrameSource):
     """A simulated folder without images (``visland simulate``): frame times and exact features
-    from ``labels.csv``; only ``--source ideal`` can measure it."""
+    from ``labels.csv``; only ``--source ideal`` can measure it.
+
+    Parameters
+    ----------
+    root : str or Path
+        The folder ``visland simulate`` wrote.
+    camera, telemetry : optional
+        Instead of its ``camera.json`` and ``telemetry.csv``.
+    """
 
     def __init__(self, root, camera=None, telemetry=None):
         root = Path(root)
@@ -235,7 +258,31 @@ def _container_times(stamps_s: np.ndarray, video_fps: float, path: Path) -> tupl
 
 
 def open_source(path, camera=None, telemetry=None, frames_csv=None, fps=None, time_offset_s=0.0) -> FrameSource:
-    """A frame folder or a video file, by what ``path`` is."""
+    """A frame folder or a video file, by what ``path`` is.
+
+    A folder without ``frames/`` but with ``labels.csv`` (``visland simulate``) opens as a
+    :class:`LabelsSource`; ``frames_csv``, ``fps`` and ``time_offset_s`` do not apply to it.
+
+    Parameters
+    ----------
+    path : str or Path
+        A SPEC frame folder, or a video (:data:`VIDEO_SUFFIXES`).
+    camera : str, Path or CameraModel, optional
+        Instead of the input's ``camera.json``.
+    telemetry : str or Path, optional
+        Instead of the input's ``telemetry.csv``.
+    frames_csv : str or Path, optional
+        Frame times ``frame,t_s`` instead of the input's ``frames.csv``.
+    fps : float, optional
+        Frame rate in Hz when there is no frames.csv (default 25, or the video's timestamps).
+    time_offset_s : float, default 0
+        Seconds added to the telemetry's times to put them on the frames' clock.
+
+    Returns
+    -------
+    FrameSource
+        ``len()``, ``times_s``, ``camera``, ``inertial``, ``truth``, ``labels`` and ``frames()``.
+    """
     path = Path(path)
     if path.is_dir():
         if not (path / "frames").exists() and (path / "labels.csv").exists():

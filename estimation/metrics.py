@@ -137,6 +137,19 @@ def error_at_height_of(dh_true_m, q_true, q_est, height_m: float) -> float:
     The error of any deviation (dH, dY, dX) at the thesis's heights: linear interpolation between
     the two samples around the first crossing; the first sample's error if the run starts below;
     NaN if the height is never reached (or an estimate around the crossing is NaN).
+
+    Parameters
+    ----------
+    dh_true_m : array_like, shape (n,)
+        True height above the runway, metres (where the height is crossed).
+    q_true, q_est : array_like, shape (n,)
+        True and estimated deviation (dH, dY or dX), metres.
+    height_m : float
+        The height of the metric, metres.
+
+    Returns
+    -------
+    float
     """
     dh = np.asarray(dh_true_m, dtype=float)
     error = np.asarray(q_true, dtype=float) - np.asarray(q_est, dtype=float)
@@ -155,17 +168,55 @@ def error_at_height_of(dh_true_m, q_true, q_est, height_m: float) -> float:
 
 
 def error_at_height(dh_true_m, dh_est_m, height_m: float) -> float:
-    """``dH - dH_hat`` where the true height first falls to ``height_m`` (interpolated)."""
+    """``dH - dH_hat`` where the true height first falls to ``height_m`` (interpolated).
+
+    Parameters
+    ----------
+    dh_true_m, dh_est_m : array_like, shape (n,)
+        True and estimated heights above the runway, metres.
+    height_m : float
+        The height of the metric, metres.
+
+    Returns
+    -------
+    float
+        Metres (NaN when the height is never reached).
+    """
     return error_at_height_of(dh_true_m, dh_true_m, dh_est_m, height_m)
 
 
 def errors_at_heights(dh_true_m, q_true, q_est, heights_ft: Sequence[float] = METRIC_HEIGHTS_FT) -> dict:
-    """``{"err_<h>ft_m": q_true - q_est at h ft}`` for each of ``heights_ft`` (see :func:`error_at_height_of`)."""
+    """``{"err_<h>ft_m": q_true - q_est at h ft}`` for each of ``heights_ft`` (see :func:`error_at_height_of`).
+
+    Parameters
+    ----------
+    dh_true_m : array_like, shape (n,)
+        True height above the runway, metres.
+    q_true, q_est : array_like, shape (n,)
+        True and estimated deviation, metres.
+    heights_ft : sequence of float, default (400, 200, 100)
+        The thesis's heights, feet.
+
+    Returns
+    -------
+    dict of str to float
+    """
     return {f"err_{h:.0f}ft_m": error_at_height_of(dh_true_m, q_true, q_est, h * FT_TO_M) for h in heights_ft}
 
 
 def std_along_trajectory(dh_true_m, dh_est_m) -> float:
-    """Standard deviation of ``dH - dH_hat`` over the samples with an estimate (thesis Table 5.8)."""
+    """Standard deviation of ``dH - dH_hat`` over the samples with an estimate (thesis Table 5.8).
+
+    Parameters
+    ----------
+    dh_true_m, dh_est_m : array_like, shape (n,)
+        True and estimated heights, metres (NaN: no estimate).
+
+    Returns
+    -------
+    float
+        Metres.
+    """
     error = np.asarray(dh_true_m, dtype=float) - np.asarray(dh_est_m, dtype=float)
     error = error[np.isfinite(error)]
     return float(np.std(error)) if error.size else math.nan
@@ -175,7 +226,23 @@ def run_metrics(t_s, dh_true_m, dh_est_m, heights_ft: Sequence[float] = METRIC_H
                 start_t_s: float | None = None) -> dict:
     """All single-run metrics: ``conv_time_5pct_s`` (the thesis's, to 100 ft), ``conv_time_5pct_to_end_s``,
     ``err_<h>ft_m`` per height, ``std_err_along_m``, ``rms_err_m`` (of the samples with an estimate),
-    ``n_estimates``."""
+    ``n_estimates``.
+
+    Parameters
+    ----------
+    t_s : array_like, shape (n,)
+        Frame times, seconds.
+    dh_true_m, dh_est_m : array_like, shape (n,)
+        True and estimated heights above the runway, metres (NaN: no estimate).
+    heights_ft : sequence of float, default (400, 200, 100)
+        Heights of the ``err_<h>ft_m`` metrics, feet.
+    start_t_s : float, optional
+        Time the observer started (convergence times count from it; default the first estimate).
+
+    Returns
+    -------
+    dict of str to float
+    """
     t, truth, est = _validated(t_s, dh_true_m, dh_est_m)
     out = {"conv_time_5pct_s": convergence_time_s(t, truth, est, start_t_s=start_t_s),
            "conv_time_5pct_to_end_s": convergence_time_s(t, truth, est, start_t_s=start_t_s, until_height_m=None)}
@@ -192,6 +259,16 @@ def aggregate_at_100ft(errors_m: Iterable[float]) -> dict:
     """Mean and population standard deviation of per-run 100 ft errors (thesis tables' last rows).
 
     Runs whose error is NaN (did not reach 100 ft, no estimate there) are excluded and counted.
+
+    Parameters
+    ----------
+    errors_m : iterable of float
+        One 100 ft error per run, metres.
+
+    Returns
+    -------
+    dict
+        ``mean_err_100ft_m``, ``std_err_100ft_m`` (metres), ``n_runs`` used and ``n_missing``.
     """
     values = np.asarray(list(errors_m), dtype=float)
     finite = values[np.isfinite(values)]

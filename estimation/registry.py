@@ -41,7 +41,18 @@ DICKMANNS_OBSERVERS = ("dickmanns-4d",)
 
 
 def observer_features(name: str) -> str:
-    """"points" or "lines" for a SPEC observer name."""
+    """"points" or "lines" for a SPEC observer name.
+
+    Parameters
+    ----------
+    name : str
+        A SPEC observer name (``kf-2p``, ``ekf-2l``...; :data:`OBSERVER_NAMES`).
+
+    Returns
+    -------
+    str
+        ``"points"`` or ``"lines"``: the features it reads.
+    """
     return _entry(name)[2]
 
 
@@ -53,7 +64,18 @@ def _entry(name: str):
 
 
 def observer_class(name: str) -> type:
-    """The class implementing observer ``name`` (imports its module on first use)."""
+    """The class implementing observer ``name`` (imports its module on first use).
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`OBSERVER_NAMES`; another raises ``ValueError`` listing them.
+
+    Returns
+    -------
+    type
+        A subclass of :class:`visland.estimation.base.Observer`.
+    """
     module_name, class_name, _ = _entry(name)
     try:
         module = importlib.import_module(module_name)
@@ -70,5 +92,17 @@ def observer_class(name: str) -> type:
 
 
 def make_observer(name: str, params=None) -> Observer:
-    """A fresh observer ``name`` with ``params`` (its parameter dataclass, a dict, or None for defaults)."""
+    """A fresh observer ``name`` with ``params``.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`OBSERVER_NAMES`.
+    params : dataclass or dict, optional
+        Its parameter dataclass, a dict of its fields, or None for the defaults.
+
+    Returns
+    -------
+    visland.estimation.base.Observer
+    """
     return observer_class(name)(params)

@@ -40,6 +40,41 @@ class ObserverRun:
     cannot estimate the wind without airspeed). ``diverged_t_s`` is the time from which the
     observer's height sat on its domain bound until it was cut off (NaN: it did not diverge),
     ``diverged`` one sentence saying so (empty if not).
+
+    Attributes
+    ----------
+    observer, features : str
+        The SPEC observer name and ``"points"`` or ``"lines"``.
+    t_s : ndarray, shape (m,)
+        Frame times, seconds.
+    dh_m, dx_m, dy_m, width_m : ndarray, shape (m,)
+        Estimated height above the runway, along- and cross-track deviations, runway width, metres.
+    observability : ndarray, shape (m,)
+        The observer's observability index (thesis 3.30 or 3.40).
+    dpsi_rad : ndarray, shape (m,)
+        Heading deviation used, radians.
+    coasting : ndarray of bool, shape (m,)
+        No measurement corrected the frame.
+    reason : ndarray of str, shape (m,)
+        Why a frame has no estimate (empty otherwise).
+    start_t_s : float
+        Time of the first measured step, seconds.
+    dh0_m : float
+        The initial height guess, metres.
+    step_time_s : float
+        Wall time in ``Observer.step``, seconds.
+    n_steps : int
+        Steps taken.
+    params : dict
+        The observer's parameters as run.
+    extras : dict of str to ndarray
+        Outputs beyond the SPEC columns.
+    notes : list of str
+        What the observer said once about the run.
+    diverged_t_s : float
+        When the height started sitting on its bound (NaN: never).
+    diverged : str
+        One sentence when it diverged, empty otherwise.
     """
 
     observer: str
@@ -86,7 +121,17 @@ DIVERGED_CORRECTIONS = 3
 
 def on_domain_bound(dh_m: float) -> bool:
     """True when ``dh_m`` sits on the observers' projection bound (0.5 m or 20 km, within 0.1 %):
-    the projection hiding a correction outside the physical domain, not a height."""
+    the projection hiding a correction outside the physical domain, not a height.
+
+    Parameters
+    ----------
+    dh_m : float
+        An estimated height above the runway, metres.
+
+    Returns
+    -------
+    bool
+    """
     return dh_m >= 0.999 / ETA_MIN or dh_m <= 1.001 / ETA_MAX
 
 
@@ -98,6 +143,23 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     reason "no measurement for ... s"; frames whose height sits on the observer's domain bound
     get none either, and after :data:`DIVERGED_AFTER_S` there the observer is cut off (module
     docstring). Raises ``ValueError`` when no frame carries the observer's features.
+
+    Parameters
+    ----------
+    observer : visland.estimation.base.Observer
+        A fresh observer (:func:`visland.estimation.registry.make_observer`).
+    prepared : visland.estimation.inputs.PreparedInputs
+        The inputs of every step (:func:`visland.estimation.inputs.prepare_inputs`).
+    dh0_m : float
+        Initial guess of the height above the runway, metres.
+    aim_distance_m : float, default 320
+        Aiming point distance past the threshold, metres (for dX).
+    max_coast_s : float, default 2
+        Longest time without a correction that still gives an estimate, seconds.
+
+    Returns
+    -------
+    ObserverRun
     """
     if not (math.isfinite(max_coast_s) and max_coast_s > 0):
         raise ValueError(f"max_coast_s must be a positive number of seconds, got {max_coast_s!r}")

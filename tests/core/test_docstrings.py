@@ -31,7 +31,9 @@ DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.clocks", "vi
                       "visland.render.variety", "visland.tracking.anchoring", "visland.tracking.bench",
                       "visland.tracking.measurements", "visland.tracking.motion", "visland.tracking.params",
                       "visland.tracking.rigid", "visland.tracking.run", "visland.tracking.synthetic",
-                      "visland.tracking.template", "visland.tracking.tracker")
+                      "visland.tracking.template", "visland.tracking.tracker",
+                      "visland.estimation.metrics", "visland.estimation.registry", "visland.estimation.runner",
+                      "visland.datasets.sources")
 
 
 def _callables(module_names):
