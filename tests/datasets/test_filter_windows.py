@@ -50,3 +50,33 @@ def test_the_window_of_the_next_frame_holds_its_threshold(tmp_path):
     assert max(errors) < 2.0                            # pixels at 2048 px: the window is on the runway
     with pytest.raises(ValueError, match="asked after"):
         windows.window(n + 3)
+
+
+@pytest.mark.slow
+def test_process_with_the_filter_windows_on_rendered_frames(tmp_path):
+    """End to end: a short approach rendered at 512 px, 2.5 Hz (0.4 s between frames), processed with
+    the detector's windows and with dickmanns-4d's; both against the exact labels."""
+    from visland.datasets import generate as gen
+    from visland.datasets.process import process_input
+    from visland.render.params import SceneParams
+    from visland.scenarios import Scenario
+    from visland.simulate import SimulationOptions
+
+    scenario = Scenario("short", dx_m=-1600.0, dy_m=20.0, dgs_m=-5.0, dpsi_deg=2.0, gamma_deg=-3.0)
+    options = SimulationOptions(fps=2.5, camera=CameraModel.default(512), seed=2)
+    data = tmp_path / "short"
+    gen.generate_dataset(gen.GenerateJob(scenario, options, SceneParams(seed=2)), data, progress=False)
+    labels = read_labels(data / "labels.csv")
+    found = {}
+    for windows in ("detector", "dickmanns-4d"):
+        out = tmp_path / windows
+        process_input(data, out, ProcessOptions(observers=("dickmanns-4d",), quiet=True, report=False,
+                                                windows=windows), echo=lambda s: None)
+        from visland.contracts import read_measurements
+        m = read_measurements(out / "measurements.csv")
+        found[windows] = int(m["found"].sum())
+        both = (m["found"] > 0.5) & np.isfinite(m["near_left_u_px"]) & (labels["near_left_visible"] > 0.5)
+        error = np.hypot(m["near_left_u_px"] - labels["near_left_u_px"], m["near_left_v_px"] - labels["near_left_v_px"])
+        assert both.sum() >= 0.8 * labels.n_rows
+        assert np.median(error[both]) < 0.5                     # pixels, 512 px frames
+    assert found["dickmanns-4d"] >= found["detector"] - 1
