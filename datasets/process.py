@@ -86,7 +86,8 @@ def _align_clocks(source, options: ProcessOptions, echo) -> None:
         echo(f"clock offset not estimated: {error}; using --time-offset ({options.time_offset_s:+.3f} s)")
         return
     echo(f"clock offset estimated from the horizon's roll against the telemetry's: {found.offset_s:+.3f} s "
-         f"+- {found.sigma_s:.3f} s (one sigma, {found.frames_used} frames, residual {found.residual_deg:.2f} deg)")
+         f"+- {found.sigma_s:.3f} s (one sigma; {found.inliers} of {found.frames_used} frames follow the telemetry's "
+         f"roll, residual {found.residual_deg:.2f} deg)")
     source.shift_telemetry(found.offset_s)
 
 
