@@ -54,11 +54,14 @@ class TimeOffset:
     offset_s : float
         Seconds to add to the telemetry's times (``--time-offset``).
     sigma_s : float
-        One-sigma uncertainty, seconds (widened by the residuals' frame-to-frame correlation).
+        One-sigma uncertainty, seconds: the larger of the least-squares one over the inlier
+        frames (widened by their residuals' frame-to-frame correlation) and the block jackknife's.
     frames_used : int
         Frames whose horizon gave a roll.
     residual_deg : float
-        RMS roll difference between the frames and the shifted telemetry, degrees.
+        RMS roll difference between the inlier frames and the shifted telemetry, degrees.
+    inliers : int
+        Frames whose roll follows the shifted telemetry's within :data:`INLIER_DEG`.
     """
 
     offset_s: float
