@@ -63,7 +63,17 @@ STATE_LIMIT = 1e9
 
 
 def clip_eta(eta: float) -> float:
-    """Project an estimate of ``eta = 1/dH`` onto ``[ETA_MIN, ETA_MAX]`` (scalar, fast)."""
+    """Project an estimate of ``eta = 1/dH`` onto ``[ETA_MIN, ETA_MAX]`` (scalar, fast).
+
+    Parameters
+    ----------
+    eta : float
+        Inverse height, 1/m.
+
+    Returns
+    -------
+    float
+    """
     if eta < ETA_MIN:
         return ETA_MIN
     if eta > ETA_MAX:
@@ -193,6 +203,14 @@ def observer_measurement(inp: ObserverInput, features: str) -> tuple[np.ndarray 
     Returns ``(array, "")`` with a (2, 2) float array, or ``(None, reason)`` when there is no
     usable measurement (absent or non-finite: a coasting step). A measurement of the wrong
     shape is a programming error: ``ValueError``.
+
+    Parameters
+    ----------
+    inp : ObserverInput
+        This step's input.
+    features : str
+        ``"points"`` (the virtual-frame threshold corners, thesis 3.23) or ``"lines"`` (the two
+        edges' ``(rho, theta)``).
     """
     value = inp.points_yv if features == "points" else inp.lines
     if value is None:
@@ -250,6 +268,12 @@ class Observer(abc.ABC):
       whose state turned non-finite.
 
     ``reset`` and ``step`` validate the inputs (see module docstring) and keep the time.
+
+    Parameters
+    ----------
+    params : ObserverParams or dict, optional
+        The subclass's ``params_type`` instance, a dict of its fields (validated), or None for
+        its defaults.
     """
 
     name: ClassVar[str] = ""

@@ -43,7 +43,27 @@ def check_initial_guess(initial_height_m: float | None, initial_error: float) ->
 
 @dataclass(frozen=True)
 class EstimateOptions:
-    """What ``visland estimate`` does with a folder (see the command's --help)."""
+    """What ``visland estimate`` does with a folder (see the command's --help).
+
+    Attributes
+    ----------
+    observers : tuple of str
+        SPEC observer names.
+    measurements : str, default "ideal"
+        A ``measurements.csv`` path, or ``"ideal"`` for the folder's ``labels.csv``.
+    initial_height_m : float, optional
+        Initial height guess, metres (required without ``truth.csv``).
+    initial_error : float, default 0.2
+        With truth and no guess: start this fraction above the true height.
+    aim_distance_m : float, default 320
+        Aiming point distance past the threshold, metres.
+    params_file : str, optional
+        Observer parameters, TOML or JSON (:func:`load_observer_params`).
+    self_calibration : str, default "check"
+        ``"check"`` reports the mounting's self-calibration, ``"apply"`` corrects with it.
+    time_offset_s : float, default 0
+        Seconds added to the telemetry's times.
+    """
 
     observers: tuple
     measurements: str = "ideal"
@@ -77,6 +97,16 @@ def load_observer_params(path) -> dict:
         [ccpi-hg-2p]
         response_time_s = 8.0
         damping = 0.8
+
+    Parameters
+    ----------
+    path : str or Path
+        The TOML or JSON file.
+
+    Returns
+    -------
+    dict of str to dict
+        Observer name -> its parameter fields (validated when the observer is made).
     """
     path = Path(path)
     what = "observer parameter file"
@@ -131,6 +161,24 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_
     dict, its sentence stored there. The mounting's self-calibration (``options.self_calibration``
     "check" or "apply") is echoed and, when ``calibration_out`` is a dict, its summary and sentence
     stored there (``summary``, ``describe``).
+
+    Parameters
+    ----------
+    folder : str or Path
+        A folder with telemetry.csv and camera.json (and truth.csv, labels.csv).
+    options : EstimateOptions
+        What to run.
+    out_path : str or Path
+        The ``estimates.csv`` to write.
+    echo : callable, default print
+        Where the progress lines go.
+    not_started, diverged, calibration_out : dict, optional
+        Filled as described above.
+
+    Returns
+    -------
+    dict
+        Metrics per observer name (:func:`visland.estimation.metrics.run_metrics`).
     """
     from visland.contracts import ESTIMATE_COLUMNS, atomic_write_text, write_csv
     from visland.estimation.inputs import prepare_inputs

@@ -34,7 +34,19 @@ DEFAULT_AIM_DISTANCE_M = 320.0
 
 @dataclass(frozen=True)
 class Deviations:
-    """SPEC deviations (metres); NaN where the feature set cannot give one (dX from lines)."""
+    """SPEC deviations (metres); NaN where the feature set cannot give one (dX from lines).
+
+    Attributes
+    ----------
+    dx_m : float
+        Along-track position relative to the aiming point E, metres (negative before it).
+    dy_m : float
+        Cross-track deviation, metres, right of the centreline positive.
+    dh_m : float
+        Height above the runway, metres.
+    width_m : float
+        Runway width recovered from the image, metres.
+    """
 
     dx_m: float
     dy_m: float
@@ -43,7 +55,21 @@ class Deviations:
 
 
 def deviations_from_points(points_yv, dh_m: float, aim_distance_m: float = DEFAULT_AIM_DISTANCE_M) -> Deviations:
-    """Deviations from the threshold corners' virtual coordinates (rows P', P'') and dH."""
+    """Deviations from the threshold corners' virtual coordinates (rows P', P'') and dH.
+
+    Parameters
+    ----------
+    points_yv : array_like, shape (2, 2)
+        Virtual coordinates ``y_v`` of P' and P'' (thesis 3.23), one row each.
+    dh_m : float
+        Height above the runway, metres.
+    aim_distance_m : float, default 320
+        Aiming point distance past the threshold, metres.
+
+    Returns
+    -------
+    Deviations
+    """
     yv = np.asarray(points_yv, dtype=float)
     if yv.shape != (2, 2):
         raise ValueError(f"points_yv must have shape (2, 2) (rows P', P''), got {yv.shape}")
@@ -55,7 +81,23 @@ def deviations_from_points(points_yv, dh_m: float, aim_distance_m: float = DEFAU
 
 
 def deviations_from_lines(lines, R_runway_from_camera, dh_m: float) -> Deviations:
-    """Lateral deviation and width from the left/right edge lines ``[[rho, theta], [rho, theta]]``."""
+    """Lateral deviation and width from the left/right edge lines ``[[rho, theta], [rho, theta]]``.
+
+    Parameters
+    ----------
+    lines : array_like, shape (2, 2)
+        ``[[rho, theta], [rho, theta]]`` of the left and right edges (SPEC chart, normalised
+        coordinates, radians).
+    R_runway_from_camera : ndarray, shape (3, 3)
+        Camera-to-runway rotation.
+    dh_m : float
+        Height above the runway, metres.
+
+    Returns
+    -------
+    Deviations
+        ``dx_m`` NaN (the edges do not fix the position along the runway).
+    """
     lines = np.asarray(lines, dtype=float)
     if lines.shape != (2, 2):
         raise ValueError(f"lines must have shape (2, 2) (rows left, right edge), got {lines.shape}")

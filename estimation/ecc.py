@@ -37,7 +37,17 @@ __all__ = ["EccHGParams", "EccHOSMParams", "EccHG", "EccHOSM"]
 
 @dataclass(frozen=True)
 class EccHGParams(PointsParams):
-    """ECC'15 high-gain tuning (section IV.B): damping xi, pulsation omega (rad/s), lambda_i."""
+    """ECC'15 high-gain tuning (section IV.B): damping xi, pulsation omega (rad/s), lambda_i.
+
+    Attributes
+    ----------
+    max_correction_interval_s : float
+        Longest time a single correction integrates, seconds.
+    damping, omega_rad_s : float
+        Damping xi and pulsation omega (rad/s) of the high-gain correction.
+    lambda_hg : float
+        High-gain parameter lambda_i.
+    """
 
     damping: float = 0.7
     omega_rad_s: float = 1.0
@@ -60,6 +70,17 @@ class EccHOSMParams(PointsParams):
     2-3 s on ideal measurements and stays within 0.8 m at 100 ft with 1 px of noise.
     ``implicit``: the sliding-mode terms discretised implicitly (no chattering, default) or by
     explicit Euler of ``sign``.
+
+    Attributes
+    ----------
+    max_correction_interval_s : float
+        Longest time a single correction integrates, seconds.
+    lipschitz : float
+        The bound L of eq. 23.
+    a1, a2 : float
+        The sliding-mode gains of eq. 23.
+    implicit : bool
+        Implicit discretisation of the sliding-mode terms.
     """
 
     lipschitz: float = 3.0e-3
@@ -108,7 +129,13 @@ class _EccObserver(_PointsObserver):
 
 
 class EccHG(_EccObserver):
-    """ECC'15 high-gain observer (eq. 17-20) on z = (y1, y2, y3, 1/dH)."""
+    """ECC'15 high-gain observer (eq. 17-20) on z = (y1, y2, y3, 1/dH).
+
+    Parameters
+    ----------
+    params : EccHGParams or dict, optional
+        Tuning (default :class:`EccHGParams`).
+    """
 
     name = "ecc-hg"
     params_type = EccHGParams
@@ -123,7 +150,13 @@ class EccHG(_EccObserver):
 
 
 class EccHOSM(_EccObserver):
-    """ECC'15 high-order sliding-mode observer (eq. 17, 22-24) on z = (y1, y2, y3, 1/dH)."""
+    """ECC'15 high-order sliding-mode observer (eq. 17, 22-24) on z = (y1, y2, y3, 1/dH).
+
+    Parameters
+    ----------
+    params : EccHOSMParams or dict, optional
+        Tuning (default :class:`EccHOSMParams`).
+    """
 
     name = "ecc-hosm"
     params_type = EccHOSMParams

@@ -63,6 +63,9 @@ __all__ = ["KFParams", "KF2P"]
 class KFParams(PointsParams):
     """Tuning of the pseudo-measurement Kalman filter.
 
+    Parameters
+    ----------
+    max_correction_interval_s : longest time a single correction integrates, seconds.
     initial_height_sigma_fraction : standard deviation of the initial dH error, as a fraction of
         the guess (the seeds start 20 % off).
     image_sigma_rad : image measurement noise as an angle (1 px of the SPEC camera = 1/2472 rad).
@@ -91,7 +94,13 @@ class KFParams(PointsParams):
 
 class KF2P(_PointsObserver):
     """Kalman filter with pseudo-measurements on P' and P'' (thesis annex 5.4-5.6); filterpy's
-    KalmanFilter holds the state and covariance, its predict and update are written out here."""
+    KalmanFilter holds the state and covariance, its predict and update are written out here.
+
+    Parameters
+    ----------
+    params : KFParams or dict, optional
+        Tuning (default :class:`KFParams`).
+    """
 
     substep_correction = False          # one Kalman update per measurement
     name = "kf-2p"

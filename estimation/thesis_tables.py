@@ -49,5 +49,19 @@ THESIS_TABLES, THESIS_CONDITIONS = _read()
 
 
 def thesis_value(table: str, observer: str, metric: str) -> float | None:
-    """The thesis figure, or None when the thesis has none for this observer and metric."""
+    """The thesis figure, or None when the thesis has none for this observer and metric.
+
+    Parameters
+    ----------
+    table : str
+        A thesis table (``"5.6"``, ``"5.7"``...), as in ``thesis_tables.csv``.
+    observer : str
+        SPEC observer name.
+    metric : str
+        The ``metric`` of ``thesis_tables.csv`` (``mean_err_100ft_m_all8``, ``conv_time_5pct_s_traj1``...).
+
+    Returns
+    -------
+    float or None
+    """
     return THESIS_TABLES.get((table, observer, metric))

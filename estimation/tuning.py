@@ -38,7 +38,20 @@ def settling_time_normalised(damping: float) -> float:
 
 
 def omega_for_settling_time(settling_time_s: float, damping: float) -> float:
-    """Natural frequency (rad/s) giving a 5 % response time ``settling_time_s`` at ``damping``."""
+    """Natural frequency (rad/s) giving a 5 % response time ``settling_time_s`` at ``damping``.
+
+    Parameters
+    ----------
+    settling_time_s : float
+        Time to enter and stay in the 5 % band of a step response, seconds.
+    damping : float
+        Damping ratio of the second-order response.
+
+    Returns
+    -------
+    float
+        rad/s.
+    """
     if not (isinstance(settling_time_s, (int, float)) and math.isfinite(settling_time_s) and settling_time_s > 0):
         raise ValueError(f"settling_time_s must be a positive number of seconds, got {settling_time_s!r}")
     return settling_time_normalised(float(damping)) / settling_time_s

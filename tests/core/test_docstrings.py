@@ -32,8 +32,10 @@ DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.clocks", "vi
                       "visland.tracking.measurements", "visland.tracking.motion", "visland.tracking.params",
                       "visland.tracking.rigid", "visland.tracking.run", "visland.tracking.synthetic",
                       "visland.tracking.template", "visland.tracking.tracker",
-                      "visland.estimation.metrics", "visland.estimation.registry", "visland.estimation.runner",
-                      "visland.datasets.sources")
+                      "visland.estimation.base", "visland.estimation.command", "visland.estimation.deviations",
+                      "visland.estimation.ecc", "visland.estimation.kalman", "visland.estimation.metrics",
+                      "visland.estimation.registry", "visland.estimation.runner", "visland.estimation.thesis_tables",
+                      "visland.estimation.tuning", "visland.datasets.sources")
 
 
 def _callables(module_names):
