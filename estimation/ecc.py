@@ -130,11 +130,6 @@ class _EccObserver(_PointsObserver):
 
 class EccHG(_EccObserver):
     """ECC'15 high-gain observer (eq. 17-20) on z = (y1, y2, y3, 1/dH).
-
-    Parameters
-    ----------
-    params : EccHGParams or dict, optional
-        Tuning (default :class:`EccHGParams`).
     """
 
     name = "ecc-hg"
@@ -151,11 +146,6 @@ class EccHG(_EccObserver):
 
 class EccHOSM(_EccObserver):
     """ECC'15 high-order sliding-mode observer (eq. 17, 22-24) on z = (y1, y2, y3, 1/dH).
-
-    Parameters
-    ----------
-    params : EccHOSMParams or dict, optional
-        Tuning (default :class:`EccHOSMParams`).
     """
 
     name = "ecc-hosm"

@@ -95,11 +95,6 @@ class KFParams(PointsParams):
 class KF2P(_PointsObserver):
     """Kalman filter with pseudo-measurements on P' and P'' (thesis annex 5.4-5.6); filterpy's
     KalmanFilter holds the state and covariance, its predict and update are written out here.
-
-    Parameters
-    ----------
-    params : KFParams or dict, optional
-        Tuning (default :class:`KFParams`).
     """
 
     substep_correction = False          # one Kalman update per measurement

@@ -48,7 +48,20 @@ CORRECTION_SUBSTEP_S = 0.04
 
 # --------------------------------------------------------------------------- maths
 def points_phi(y, v) -> list:
-    """``Phi(y, v)`` of thesis 4.1 for a flat list of point coordinates ``[y1, y2, y1, y2, ...]``."""
+    """``Phi(y, v)`` of thesis 4.1 for a flat list of point coordinates ``[y1, y2, y1, y2, ...]``.
+
+    Parameters
+    ----------
+    y : sequence of float, length 2k
+        Virtual coordinates ``[y1, y2, y1, y2, ...]`` of k points (thesis 3.23).
+    v : sequence of 3 floats
+        Camera velocity in runway axes (z down), m/s.
+
+    Returns
+    -------
+    list of float, length 2k
+        ``v3 y_i - v_i`` per coordinate, m/s.
+    """
     v1, v2, v3 = v[0], v[1], v[2]
     out = []
     for k in range(0, len(y), 2):
@@ -58,7 +71,19 @@ def points_phi(y, v) -> list:
 
 
 def points_observability(y, v) -> float:
-    """Thesis 3.30: ``O = sum Phi_i^2`` over the points' coordinates, (m/s)^2."""
+    """Thesis 3.30: ``O = sum Phi_i^2`` over the points' coordinates, (m/s)^2.
+
+    Parameters
+    ----------
+    y : sequence of float, length 2k
+        Virtual coordinates ``[y1, y2, ...]``.
+    v : sequence of 3 floats
+        Camera velocity in runway axes, m/s.
+
+    Returns
+    -------
+    float
+    """
     return sum(p * p for p in points_phi(y, v))
 
 
@@ -68,6 +93,18 @@ def output_combination(y, v) -> float:
     ``y_a = sum over points of (v1 y1 + v2 y2 - v3 (y1^2 + y2^2) / 2)``; then
     ``y_a' = Delta_y eta + chi`` with ``Delta_y = -O = 2 v3 y_a - 2 (v1^2 + v2^2)`` (two points)
     and ``chi = sum (v1' y1 + v2' y2 - v3' (y1^2 + y2^2) / 2)``.
+
+    Parameters
+    ----------
+    y : sequence of float, length 2k
+        Virtual coordinates of the points, flat.
+    v : sequence of 3 floats
+        Camera velocity in runway axes (z down), m/s.
+
+    Returns
+    -------
+    float
+        ``y_a``, m/s.
     """
     v1, v2, v3 = v[0], v[1], v[2]
     total = 0.0
@@ -89,6 +126,22 @@ def pseudo_inverse_correction(phi, b: float, kappa_y, kappa_d) -> tuple[list, fl
         u_i = (r_i - b Phi_i s) / a                (y rows)
 
     (Schur complement of ``J^T J = [[a I, b Phi], [b Phi^T, |Phi|^2]]``.) Returns ``(u, s)``.
+
+    Parameters
+    ----------
+    phi : sequence of float, length m
+        The regressor ``Phi`` at ``x_hat``.
+    b : float
+        ``v3 eta`` (points).
+    kappa_y, kappa_d : sequence of float, length m
+        The correction on the outputs and on their derivatives.
+
+    Returns
+    -------
+    u : list of float, length m
+        Correction of the outputs.
+    s : float
+        Correction of eta.
     """
     a = 1.0 + b * b
     r = [ky + b * kd for ky, kd in zip(kappa_y, kappa_d)]
@@ -104,6 +157,19 @@ def levant_correction(error: float, lipschitz: float, a1: float = LEVANT_A1, a2:
 
     ``alpha = a1 L^(1/2) |e|^(1/2) sign(e)`` on the output row and ``a2 L sign(e)`` on its
     derivative row (``sign(alpha) = sign(e)``).
+
+    Parameters
+    ----------
+    error : float
+        Output error ``e = y - y_hat``.
+    lipschitz : float
+        The bound L.
+    a1, a2 : float, default 1.5, 1.1
+        Levant's coefficients.
+
+    Returns
+    -------
+    output_row, derivative_row : float
     """
     if error > 0.0:
         return a1 * math.sqrt(lipschitz * error), a2 * lipschitz
@@ -130,6 +196,21 @@ def levant_correction_implicit(error: float, lipschitz: float, a1: float, a2: fl
       is ``sat(e / (h^2 a2 L))``: ``sign(e)`` far from the surface, proportional on it.
 
     Away from the surface (``|e| >> h^2 L``) both coincide with :func:`levant_correction`.
+
+    Parameters
+    ----------
+    error : float
+        Output error ``e``.
+    lipschitz : float
+        The bound L.
+    a1, a2 : float
+        Levant's coefficients.
+    h : float
+        The step, seconds.
+
+    Returns
+    -------
+    output_row, derivative_row : float
     """
     if error == 0.0 or h <= 0.0:
         return 0.0, 0.0
@@ -148,6 +229,18 @@ def virtual_noise_sigma(y, image_sigma_rad: float) -> list:
     ``y_1 = X/Z`` is the cotangent of the depression angle, so an angle error ``sigma`` moves it
     by ``(1 + y_1^2) sigma``; ``y_2 = Y/Z`` by about ``sqrt(1 + y_1^2) sigma`` (as in
     :mod:`visland.estimation.kalman`). ``y`` is the flat list ``[y1, y2, y1, y2, ...]``.
+
+    Parameters
+    ----------
+    y : sequence of float
+        The flat list of virtual coordinates.
+    image_sigma_rad : float
+        Image noise as an angle, radians.
+
+    Returns
+    -------
+    list of float
+        One standard deviation per coordinate.
     """
     out = []
     for k in range(0, len(y), 2):
@@ -162,8 +255,11 @@ def virtual_noise_sigma(y, image_sigma_rad: float) -> list:
 class PointsParams(ObserverParams):
     """Common to the two-point observers.
 
-    max_correction_interval_s : the longest time one camera frame's correction integrates over
-        (after a gap of missing frames the observer corrects as for one nominal interval).
+    Parameters
+    ----------
+    max_correction_interval_s : float
+        Longest time one camera frame's correction integrates over, seconds (after a gap of
+        missing frames the observer corrects as for one nominal interval).
     """
 
     max_correction_interval_s: float = 0.1
@@ -176,6 +272,8 @@ class PointsParams(ObserverParams):
 class OJParams(PointsParams):
     """Identifier-based observer (Jankovic and Ghosh 1995) gains.
 
+    Parameters
+    ----------
     k_y : 1/s, output-injection gain of the identifier ``y_hat' = Phi eta_hat + k_y (y - y_hat)``.
     k_eta : s/m^2, adaptation gain ``eta_hat' = v3 eta_hat^2 + k_eta Phi(y)^T (y - y_hat)``.
     """
@@ -190,7 +288,13 @@ class OJParams(PointsParams):
 
 @dataclass(frozen=True)
 class IIParams(PointsParams):
-    """Immersion and invariance (thesis 4.2.1): ``lambda_`` in s/m^2, the decay rate is ``lambda_ O``."""
+    """Immersion and invariance (thesis 4.2.1): ``lambda_`` in s/m^2, the decay rate is ``lambda_ O``.
+
+    Parameters
+    ----------
+    lambda_ : float
+        Gain lambda, s/m^2 (the error decays at the rate ``lambda_ O``, thesis 4.8).
+    """
 
     lambda_: float = 1.0e-4
 
@@ -203,8 +307,16 @@ class IIParams(PointsParams):
 class _SecondOrderParams(PointsParams):
     """Pole placement ``s^2 + 2 xi omega s + omega^2`` by a 5 % response time and a damping.
 
-    Chapter 5.2.1 of the thesis: response time 6 s, damping 0.8. ``lambda_hg`` is the
-    high-gain scaling of thesis 4.45 (``Lambda = diag(lambda, lambda^2)``, 1 = no scaling).
+    Chapter 5.2.1 of the thesis: response time 6 s, damping 0.8.
+
+    Parameters
+    ----------
+    response_time_s : float
+        5 % response time of the correction's second-order poles, seconds.
+    damping : float
+        Damping ratio xi of those poles.
+    lambda_hg : float
+        High-gain scaling of thesis 4.45 (``Lambda = diag(lambda, lambda^2)``, 1 = no scaling).
     """
 
     response_time_s: float = 6.0
@@ -231,8 +343,10 @@ class _SecondOrderParams(PointsParams):
 class CCCSParams(_SecondOrderParams):
     """Output combination observer (thesis 4.3.1.2).
 
-    Robustness to image noise (issue 12; both 0 by default, the thesis's observer):
+    Robustness to image noise (issue 12; both 0 by default, the thesis's observer).
 
+    Parameters
+    ----------
     noise_sigma_rad : image noise as an angle (1 px of the SPEC camera = 1/2472 rad). ``y_a`` is
         quadratic in the corners, so noise of variance ``s_i^2`` on each virtual coordinate
         (:func:`virtual_noise_sigma`) biases the measured ``y_a`` by ``-v3/2 sum s_i^2``; with 5 px
@@ -254,15 +368,19 @@ class CCCSParams(_SecondOrderParams):
 
 @dataclass(frozen=True)
 class CCPIHGParams(_SecondOrderParams):
-    """Pseudo-inverse observer, high-gain correction (thesis 4.3.1.3 with 4.44-4.46)."""
+    """Pseudo-inverse observer, high-gain correction (thesis 4.3.1.3 with 4.44-4.46): the gains of
+    :class:`_SecondOrderParams`."""
 
 
 @dataclass(frozen=True)
 class CCPIHOSMParams(PointsParams):
     """Pseudo-inverse observer, high-order sliding-mode correction (thesis 4.47-4.49).
 
+    Parameters
+    ----------
     lipschitz : L of 4.47, bound on the output's second derivative error (1/s^2 in virtual
-        coordinates); a1, a2 : Levant's coefficients (1.5 and 1.1).
+        coordinates).
+    a1, a2 : Levant's coefficients (1.5 and 1.1).
     implicit : discretise the sliding-mode terms implicitly (:func:`levant_correction_implicit`,
         no chattering; default) or by explicit Euler of ``sign`` (the thesis's form).
     """
@@ -283,6 +401,8 @@ class CCPIHOSMParams(PointsParams):
 class CCCJParams(_SecondOrderParams):
     """Jacobian completion (thesis 4.4.2): second-order poles plus the fictitious output's gain.
 
+    Parameters
+    ----------
     k_fictitious : 1/s, gain K3 of 4.89 on the fictitious output ``y_f = psi eta``.
     epsilon : m/s, the threshold of 4.82 below which ``psi = max(eps^2 - |Phi|^2, 0)^2`` acts.
     """

@@ -34,8 +34,8 @@ DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.clocks", "vi
                       "visland.tracking.template", "visland.tracking.tracker",
                       "visland.estimation.base", "visland.estimation.command", "visland.estimation.deviations",
                       "visland.estimation.ecc", "visland.estimation.kalman", "visland.estimation.metrics",
-                      "visland.estimation.registry", "visland.estimation.runner", "visland.estimation.thesis_tables",
-                      "visland.estimation.tuning", "visland.datasets.sources")
+                      "visland.estimation.points", "visland.estimation.registry", "visland.estimation.runner",
+                      "visland.estimation.thesis_tables", "visland.estimation.tuning", "visland.datasets.sources")
 
 
 def _callables(module_names):
@@ -107,3 +107,29 @@ def test_the_checker_reads_a_dataclass_attributes_section():
         v_mps: float
 
     assert undocumented_parameters(Record) == ["v_mps"]
+
+
+def test_the_checker_takes_an_inherited_constructors_documentation():
+    class Base:
+        """Summary.
+
+        Parameters
+        ----------
+        params : dict, optional
+            Documented once, here.
+        """
+
+        def __init__(self, params=None):
+            self.params = params
+
+    class Child(Base):
+        """Inherits the constructor."""
+
+    class Extended(Base):
+        """Adds a parameter it does not document."""
+
+        def __init__(self, params=None, gain=1.0):
+            super().__init__(params)
+
+    assert undocumented_parameters(Child) == []
+    assert undocumented_parameters(Extended) == ["gain"]

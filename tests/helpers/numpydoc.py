@@ -3,7 +3,9 @@
 A parameter is documented when its name heads an entry of the docstring's ``Parameters``
 section (``name : type``, or ``a, b : type`` for several); a class's parameters are those of its
 constructor, documented in the class docstring (``Parameters``, or ``Attributes`` for a
-dataclass whose fields are its constructor's parameters) or in ``__init__``'s. ``*args`` and
+dataclass whose fields are its constructor's parameters) or in ``__init__``'s, or in those of
+a base class (every observer takes ``params`` as :class:`visland.estimation.base.Observer`
+documents it). ``*args`` and
 ``**kwargs`` are not required. Used by ``tests/core/test_docstrings.py`` and by
 ``python -m tests.helpers.numpydoc`` (the counts per package).
 """
@@ -54,14 +56,22 @@ def required_parameters(obj) -> list[str]:
 
 
 def undocumented_parameters(obj) -> list[str]:
-    """The parameters of ``obj`` its docstring(s) do not document, in signature order."""
+    """The parameters of ``obj`` its docstring(s) do not document, in signature order.
+
+    For a class, the docstrings of the class and of its bases (and of their ``__init__``) count:
+    a parameter or field inherited from a documented base is documented.
+    """
     if not inspect.isclass(obj):
         documented = documented_parameters(inspect.getdoc(obj))
     else:
-        sections = ("Parameters", "Other Parameters") + (("Attributes",) if is_dataclass(obj) else ())
-        documented = documented_parameters(obj.__doc__, sections)
-    if inspect.isclass(obj) and "__init__" in vars(obj):
-        documented |= documented_parameters(vars(obj)["__init__"].__doc__)
+        documented = set()
+        for cls in obj.__mro__:
+            if cls is object:
+                continue
+            sections = ("Parameters", "Other Parameters") + (("Attributes",) if is_dataclass(cls) else ())
+            documented |= documented_parameters(cls.__doc__, sections)
+            init = vars(cls).get("__init__")
+            documented |= documented_parameters(getattr(init, "__doc__", None))
     return [name for name in required_parameters(obj) if name not in documented]
 
 
