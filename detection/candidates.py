@@ -28,7 +28,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
-from visland.detection.refine import SLOPE_PER_STEP, sample_profiles, transition_offsets
+from visland.detection.refine import SLOPE_PER_STEP, median_of, sample_profiles, transition_offsets
 
 #: Median absolute deviation to standard deviation (Gaussian noise).
 MAD_TO_SIGMA = 1.4826
@@ -264,7 +264,7 @@ def _evidence_pass(image, horizon: HorizonFrame, s0_lines, k_lines, d_lo, d_hi, 
         ok = np.isfinite(edge_s[i]) & (contrast_all[i] >= params.min_contrast) & np.isfinite(step[i])
         if ok.sum() < params.check_min_points:
             continue
-        polarity = int(np.sign(np.median(step[i][ok])))
+        polarity = int(np.sign(median_of(step[i][ok])))
         ok &= np.sign(step[i]) == polarity
         if ok.sum() < params.check_min_points or polarity == 0:
             continue
@@ -291,12 +291,12 @@ def _evidence_pass(image, horizon: HorizonFrame, s0_lines, k_lines, d_lo, d_hi, 
         d_a, d_b = float(run[0]), float(run[-1])
         in_span = np.count_nonzero((d[i] >= d_a) & (d[i] <= d_b))
         support = len(run) / max(in_span, 1)
-        contrast = float(np.median(contrast_all[i][ok][inlier]))
+        contrast = float(median_of(contrast_all[i][ok][inlier]))
         length = (d_b - d_a) * math.sqrt(1 + k * k)
         if length < params.candidate_min_length_fraction * params.min_edge_length_px:
             continue
         residual = np.abs(edge_s[i][ok][inlier] - (s0 + k * depth_ok)) / math.sqrt(1 + k * k)
-        sigma_px = max(MEDIAN_ABS_TO_SIGMA * float(np.median(residual)), 0.2)
+        sigma_px = max(MEDIAN_ABS_TO_SIGMA * float(median_of(residual)), 0.2)
         spread = max(float(np.std(run)), 1.0)
         # horizon crossing uncertainty: offset and slope errors extrapolated from the run's middle
         sigma_s0 = sigma_px * math.sqrt(1 + k * k) * math.hypot(1.0, 0.5 * (d_a + d_b) / spread) / math.sqrt(len(run))
@@ -320,7 +320,7 @@ def _robust_pencil_fit(d, s, weights, min_sigma: float, iterations: int = 5):
         except np.linalg.LinAlgError:
             return None
         r = s - A @ coef
-        scale = max(MAD_TO_SIGMA * float(np.median(np.abs(r[w > 0]))), min_sigma)
+        scale = max(MAD_TO_SIGMA * float(median_of(np.abs(r[w > 0]))), min_sigma)
         u = r / (TUKEY_C * scale)
         w = w0 * np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
     inlier = w > 0

@@ -138,7 +138,7 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
         return fail("no ground below the horizon in the image")
     u0, v0, u1, v1 = ground
     sample = image[v0:v1:4, u0:u1:4]
-    spread = float(np.percentile(sample, 99) - np.percentile(sample, 1)) if sample.size else 0.0
+    spread = _percentile_spread(sample, 1.0, 99.0) if sample.size else 0.0
     if spread < params.min_contrast:
         return fail(f"frame has no contrast below the horizon (grey levels within {spread:.0f})")
 
@@ -152,6 +152,27 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     if result is None:
         return fail(why)
     return _withhold_hidden_corners(result, camera)
+
+
+def _percentile_spread(levels: np.ndarray, q_low: float, q_high: float) -> float:
+    """``np.percentile(levels, q_high) - np.percentile(levels, q_low)`` of uint8 grey levels, the
+    same number (linear interpolation between order statistics) read off their histogram: a
+    tenth of the time of sorting the quarter-million levels of a 2048 px frame's ground."""
+    if levels.dtype != np.uint8:
+        return float(np.percentile(levels, q_high) - np.percentile(levels, q_low))
+    cumulative = np.cumsum(np.bincount(levels.ravel(), minlength=256))
+    n = int(cumulative[-1])
+
+    def percentile(q):
+        index = (n - 1) * (q / 100.0)
+        lo = int(math.floor(index))
+        t = index - lo
+        # the order statistics lo and lo + 1: the first level whose cumulative count exceeds them
+        a = float(np.searchsorted(cumulative, lo, side="right"))
+        b = float(np.searchsorted(cumulative, min(lo + 1, n - 1), side="right"))
+        return b - (b - a) * (1 - t) if t >= 0.5 else a + (b - a) * t     # numpy's lerp
+
+    return percentile(q_high) - percentile(q_low)
 
 
 def _withhold_hidden_corners(result: DetectionResult, camera: CameraModel) -> DetectionResult:

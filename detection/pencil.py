@@ -26,6 +26,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
+from visland.detection.refine import median_of
 
 __all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_mean", "finite_median"]
 
@@ -265,4 +266,4 @@ def finite_median(values) -> float:
     """Median of the finite values (NaN when there are none, without a warning)."""
     values = np.asarray(values, float)
     values = values[np.isfinite(values)]
-    return float(np.median(values)) if values.size else math.nan
+    return float(median_of(values)) if values.size else math.nan

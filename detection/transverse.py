@@ -31,7 +31,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame
 from visland.detection.pencil import finite_median, rectify, row_mean, row_quantile
-from visland.detection.refine import PixelLine, chroma_of
+from visland.detection.refine import PixelLine, chroma_of, median_of
 
 __all__ = ["TransverseLine", "SurfaceExtent", "find_transverse_line", "surface_extent"]
 
@@ -131,7 +131,7 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
             references.append(reference_side)
     if not references:
         return None
-    reference = float(np.median(references))
+    reference = float(median_of(references))
     # majority over three rows, then the run of runway rows holding the core
     padded = np.concatenate([[runway[0]], runway, [runway[-1]]]).astype(int)
     runway = (padded[:-2] + padded[1:-1] + padded[2:]) >= 2
@@ -257,8 +257,10 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     width_s = abs(sd_right[0] - sd_left[0]) * d_expected / d_ref       # runway width along the horizon at d_expected
     outer = max(2.5, 0.02 * d_expected, marking_fraction * width_s * d_expected / horizon.camera.fx + 1.0)
     profile_of = functools.partial(_depth_profile, maps=maps, inside=inside, rows_ok=rows_ok)
-    patch = image[v0:v1, u0:u1]
-    level_profile, texture_profile = profile_of(patch, texture=True)
+    # the grey levels on the transverse lines, resampled once: the level and texture profiles
+    # and each third of the width (:func:`_spans_width`) read them
+    values = _transverse_values(image[v0:v1, u0:u1], maps, inside)
+    level_profile, texture_profile = _profiles_of(values, rows_ok, texture=True)
     grey = _step_profile(level_profile, depths, step_d_px, d_expected, outward)
     texture = _step_profile(texture_profile, depths, step_d_px, d_expected, outward)
     chosen = grey.pick(min_significance, 0.25 * min_step, inner, outer, outward) if grey else None
@@ -313,8 +315,7 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
         # no departure from the ground looks like the runway's start: the strongest step in the
         # window would be a guess (a marking, a pavement joining the runway), so there is none
         return None
-    spans = _spans_width(patch, maps, inside, rows_ok, fractions, depths, outward, depth,
-                         level_profile, texture_profile)
+    spans = _spans_width(values, inside, rows_ok, fractions, depths, outward, depth, level_profile, texture_profile)
     centre_point = horizon.pencil_point(s0, k_centre, depth)
     line_h = np.cross(np.array([centre_point[0], centre_point[1], 1.0]), v2)
     line_h = line_h / np.linalg.norm(line_h[:2])
@@ -333,7 +334,7 @@ def _transition(profile, depths, depth, outward, reach: float = 3.0) -> float:
     return float(profile[outside].mean() - profile[inside].mean())
 
 
-def _spans_width(patch, maps, inside, rows_ok, fractions, depths, outward, depth, level_profile, texture_profile,
+def _spans_width(values, inside, rows_ok, fractions, depths, outward, depth, level_profile, texture_profile,
                  n_parts: int = 3, min_share: float = 0.3) -> bool:
     """Does the boundary at ``depth`` run across the runway's whole width?
 
@@ -341,6 +342,9 @@ def _spans_width(patch, maps, inside, rows_ok, fractions, depths, outward, depth
     point marking, a designation number or a pavement joining one side does not. The change of
     level (or of texture) across ``depth`` seen over the whole width must be seen, with the same
     sign and at least ``min_share`` of its size, in each third of the width.
+
+    ``values``: the grey levels on the transverse lines (:func:`_transverse_values`, NaN outside
+    ``inside``), columns at ``fractions`` of the width.
     """
     reference = [_transition(level_profile, depths, depth, outward),
                  _transition(texture_profile, depths, depth, outward)]
@@ -348,7 +352,7 @@ def _spans_width(patch, maps, inside, rows_ok, fractions, depths, outward, depth
         sub_inside = np.zeros_like(inside)
         sub_inside[:, columns] = inside[:, columns]
         sub_rows = rows_ok & (sub_inside.sum(axis=1) >= 0.5 * len(columns))
-        level, spread = _depth_profile(patch, maps, sub_inside, sub_rows, texture=True)
+        level, spread = _profiles_of(np.where(sub_inside, values, np.nan), sub_rows, texture=True)
         ok = False
         for whole, part_profile in zip(reference, (level, spread)):
             part = _transition(part_profile, depths, depth, outward)
@@ -390,9 +394,9 @@ def _fit_boundary(profile: "_StepProfile", outward: int, d_exit: float,
     outside, band, inside = u > 0.75, (u <= 0.5) & (u >= -1.0), u < -2.0
     if outside.sum() < 2 or inside.sum() < 2 or band.sum() < 1:
         return None
-    g0 = float(np.median(p[outside]))
+    g0 = float(median_of(p[outside]))
     level1 = float(p[band][np.argmax(np.abs(p[band] - g0))])
-    level2 = float(np.median(p[inside]))
+    level2 = float(median_of(p[inside]))
 
     def model(x):
         b0, b1, l1, l2, u1, w, sigma = x
@@ -417,9 +421,18 @@ def _depth_profile(patch, maps, inside, rows_ok, texture: bool = False):
     with ``texture``, also the spread across the line (mean absolute deviation from its median):
     threshold stripes are longitudinal, so across the line they alternate with the surface
     between them and the spread is high where they are, whatever their blended mean level."""
+    return _profiles_of(_transverse_values(patch, maps, inside), rows_ok, texture)
+
+
+def _transverse_values(patch, maps, inside):
+    """``patch`` resampled at ``maps`` (bilinear), NaN where not ``inside``: (lines, columns) float32."""
     values = cv2.remap(np.asarray(patch, dtype=np.float32), maps[0], maps[1], cv2.INTER_LINEAR,
                        borderMode=cv2.BORDER_REPLICATE)
-    values = np.where(inside, values, np.nan)
+    return np.where(inside, values, np.nan)
+
+
+def _profiles_of(values, rows_ok, texture: bool = False):
+    """:func:`_depth_profile` of values already resampled (:func:`_transverse_values`)."""
     profile = np.where(rows_ok, row_mean(values), np.nan)
     if not texture:
         return profile
@@ -478,7 +491,7 @@ class _StepProfile:
             return []
         x, y = beyond[order], light[order]
         reference_slope, reference_offset = np.polyfit(x[:n_ground], y[:n_ground], 1)
-        texture = 1.4826 * float(np.median(np.abs(y[:n_ground] - (reference_slope * x[:n_ground] + reference_offset))))
+        texture = 1.4826 * float(median_of(np.abs(y[:n_ground] - (reference_slope * x[:n_ground] + reference_offset))))
         trend_samples = max(6, int(round(trend_px / self.step_d_px)))
         # the line through the trend_samples before each sample (sliding least squares from
         # cumulative sums): slope, offset and residual RMS for every candidate at once
@@ -595,7 +608,7 @@ def _step_profile(profile, depths, step_d_px, d_expected, outward) -> _StepProfi
     magnitude = np.abs(g)
 
     def spread(pool):
-        return 1.4826 * float(np.median(np.abs(pool - np.median(pool)))) if pool.size >= 8 else math.inf
+        return 1.4826 * float(median_of(np.abs(pool - median_of(pool)))) if pool.size >= 8 else math.inf
 
     outside = valid & ((depths > d_expected + 2.0) if outward > 0 else (depths < d_expected - 2.0))
     noise = min(spread(magnitude[valid]), spread(magnitude[outside])) + 1e-3

@@ -33,6 +33,7 @@ import numpy as np
 from visland.detection.candidates import CandidateLines
 from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
+from visland.detection.refine import median_of
 from visland.detection.pencil import (PencilEdges, PencilImage, finite_median, pencil_edges, rectify, row_mean,
                                       row_quantile)
 
@@ -287,7 +288,7 @@ def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: fl
     if inside.size < 4 or out_left.size < 4 or out_right.size < 4:
         return empty
     q25, q50, q75 = np.percentile(inside, [25, 50, 75])
-    m_left, m_right = float(np.median(out_left)), float(np.median(out_right))
+    m_left, m_right = float(median_of(out_left)), float(median_of(out_right))
     ground = finite_median(ground_rows[rows]) if ground_rows is not None else math.nan
     result = {"interior": float(q50 - 0.5 * (m_left + m_right)), "outside_gap": m_left - m_right,
               "spread": float(q75 - q25), "centre_polarity": 0, "centre_rows": 0.0,
