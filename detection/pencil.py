@@ -28,7 +28,8 @@ from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import median_of
 
-__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_mean", "finite_median"]
+__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_mean", "finite_median",
+           "as_slice"]
 
 
 @dataclass(frozen=True)
@@ -188,8 +189,9 @@ def pencil_edges(rect: PencilImage, params: DetectorParams) -> PencilEdges:
         if rows.sum() < 2:
             edges_of_bands.append((np.zeros(0, int), np.zeros(0)))
             continue
-        counts = np.isfinite(values[rows]).sum(axis=0)
-        total = np.where(np.isfinite(values[rows]), values[rows], 0.0).sum(axis=0)
+        band = values[as_slice(rows)]
+        counts = np.isfinite(band).sum(axis=0)
+        total = np.where(np.isfinite(band), band, 0.0).sum(axis=0)
         with np.errstate(invalid="ignore", divide="ignore"):
             profile = np.where(counts >= params.pencil_column_coverage * rows.sum(), total / counts, np.nan)
         profiles[index] = profile
@@ -239,6 +241,16 @@ def pencil_edges(rect: PencilImage, params: DetectorParams) -> PencilEdges:
     a = np.array(out)
     return PencilEdges(rect.s0, a[:, 0], a[:, 1].astype(int), a[:, 2], a[:, 3], a[:, 4], a[:, 5], band_array,
                        profiles)
+
+
+def as_slice(mask: np.ndarray):
+    """A boolean ``mask`` whose true entries are one run (rows or columns of a pencil image
+    between two depths or slopes) as the equivalent slice, so that indexing with it is a view
+    instead of a copy; any other mask is returned as it is."""
+    index = np.flatnonzero(mask)
+    if len(index) and index[-1] - index[0] + 1 == len(index):
+        return slice(int(index[0]), int(index[-1]) + 1)
+    return mask
 
 
 def row_quantile(values: np.ndarray, q: float) -> np.ndarray:

@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from visland.detection.horizon import HorizonFrame
-from visland.detection.pencil import finite_median, rectify, row_mean, row_quantile
+from visland.detection.pencil import as_slice, finite_median, rectify, row_mean, row_quantile
 from visland.detection.refine import PixelLine, chroma_of, median_of
 
 __all__ = ["TransverseLine", "SurfaceExtent", "find_transverse_line", "surface_extent"]
@@ -106,8 +106,8 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     if rect is None:
         return None
     f = (rect.k - k_left) / width
-    inside = (f >= 0.1) & (f <= 0.9)
-    beside = (((f >= -0.38) & (f <= -0.12)), ((f >= 1.12) & (f <= 1.38)))
+    inside = as_slice((f >= 0.1) & (f <= 0.9))
+    beside = (as_slice((f >= -0.38) & (f <= -0.12)), as_slice((f >= 1.12) & (f <= 1.38)))
     with np.errstate(invalid="ignore"):
         # the ground beside each edge separately: a taxiway joining one side makes that side
         # paved for a while, the other side still tells the runway from its surroundings

@@ -34,7 +34,7 @@ from visland.detection.candidates import CandidateLines
 from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import median_of
-from visland.detection.pencil import (PencilEdges, PencilImage, finite_median, pencil_edges, rectify, row_mean,
+from visland.detection.pencil import (PencilEdges, PencilImage, as_slice, finite_median, pencil_edges, rectify, row_mean,
                                       row_quantile)
 
 __all__ = ["Prediction", "RunwayHypothesis", "vanishing_point_candidates", "runway_hypotheses"]
@@ -270,7 +270,7 @@ def _inside_evidence(rect: PencilImage, k_left: float, k_right: float, d_far: fl
     rows = rect.rows_between(d_far, d_near)
     if rows.sum() < 2:
         return empty
-    block = rect.values[rows]
+    block = rect.values[as_slice(rows)]
     width = k_right - k_left
 
     def columns(f_lo, f_hi):
@@ -335,8 +335,9 @@ def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, 
         return 0
     with np.errstate(invalid="ignore"):
         out_level = row_quantile(rect.values[:, outside], 0.5)
-        low = row_quantile(rect.values[:, inside], 0.25)
-        high = row_quantile(rect.values[:, inside], 0.75)
+        between = rect.values[:, as_slice(inside)]
+        low = row_quantile(between, 0.25)
+        high = row_quantile(between, 0.75)
     core_margin = params.strip_core_margin * (d_near - d_far)
     core = rect.rows_between(d_far + core_margin, d_near - core_margin)
     if core.sum() < 1:
