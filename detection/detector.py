@@ -34,7 +34,7 @@ from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import LineFit, NoFit, PixelLine, chroma_boundary, refine_line
 from visland.detection.result import DetectionResult, not_found
-from visland.detection.threshold_marking import threshold_marking
+from visland.detection.threshold_marking import ground_begins, threshold_marking
 from visland.detection.transverse import find_transverse_line, surface_extent
 from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
@@ -594,15 +594,35 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
                                surface_level=surface_level)
     far_withheld = False
     if near is not None:
-        # pavement before the threshold (displaced threshold, blast pad): the threshold is the
-        # marking across the runway inside it, not where the pavement begins
+        # a step inside the pavement (a patch's edge, the stripes' inner edge) is not where the
+        # runway begins: the ground must begin at the threshold, or the step is searched again
+        # where it does; then, if the pavement precedes a threshold marking (displaced
+        # threshold, blast pad), the threshold is that marking
+        d_pavement, pavement_step, moved = near.depth_px, near.step, None
+        ground = ground_begins(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px,
+                               min(d_exit, near.depth_px + 0.5 * depth_span + 8.0), surface_level, min_step)
+        if ground is not None and ground[0] > near.depth_px + 3.0:
+            d_ground, pavement_step = ground
+            d_pavement = d_ground
+            again = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
+                                         d_ground, (d_ground - 3.0, min(bottom_depth, d_ground + 3.0)), outward=1,
+                                         min_step=min_step, colour=ctx.colour, surface_level=surface_level)
+            moved = again if again is not None and again.spans and abs(again.depth_px - d_ground) <= 2.0 else False
+            if moved:
+                d_pavement, pavement_step = moved.depth_px, moved.step
         marking = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
-                                    near.depth_px, 1.0, min_step, surface_level=surface_level,
-                                    pavement_step=near.step)
+                                    d_pavement, 1.0, min_step, surface_level=surface_level,
+                                    pavement_step=pavement_step)
         if marking is not None:
             notes.append(f"threshold on the {marking.kind} marking {marking.pavement_widths:.1f} runway widths "
                          "inside the pavement")
             near = marking.line
+        elif moved:
+            notes.append(f"threshold moved {moved.depth_px - near.depth_px:.1f} px to where the pavement ends")
+            near = moved
+        elif moved is False:
+            notes.append("threshold withheld: pavement continues before the step found")
+            near = None
     if near is not None and far is not None and far.spans:
         # a runway is a long strip (params.min_length_to_width widths at least): an "end" found
         # nearer than that past the threshold is a marking (the far side of the threshold stripes

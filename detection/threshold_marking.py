@@ -39,7 +39,7 @@ from visland.detection.horizon import HorizonFrame
 from visland.detection.refine import PixelLine
 from visland.detection.transverse import TransverseLine
 
-__all__ = ["ThresholdMarking", "threshold_marking", "STRIPES_FROM_THRESHOLD_WIDTHS"]
+__all__ = ["ThresholdMarking", "threshold_marking", "ground_begins", "STRIPES_FROM_THRESHOLD_WIDTHS"]
 
 #: Threshold stripes begin 6 m past the threshold (ICAO Annex 14 5.2.4.5; FAA: 20 ft), in runway
 #: widths for a 45 m runway (the width is not known in metres: 0.1 to 0.26 of 23-60 m widths).
@@ -202,3 +202,67 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
                           corner_right_uv=_meet(line_h, line_right), depth_px=edge,
                           step=(band_level - plain_level), significance=math.nan, method=f"marking-{kind}", spans=True)
     return ThresholdMarking(line=line, kind=kind, pavement_widths=float(widths_in))
+
+
+def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine, d_from: float,
+                  d_to: float, surface_level: float, min_step: float, step_d_px: float = 0.5,
+                  min_ground_px: float = 1.5) -> tuple[float, float] | None:
+    """Depth where the ground begins before a threshold found at ``d_from``, searching towards the
+    camera up to ``d_to``.
+
+    Row by row along transverse lines (through V2), the surface between the edges (median of the
+    middle 70 %) is compared with the ground beside each edge (15 to 40 % of the width outside):
+    a row is pavement while it differs from both sides the way the runway's own surface
+    ``surface_level`` does (by half that difference at least; a taxiway joining one side makes
+    that side paved, and the row counts as ground, so nothing moves). Returns the depth of the
+    first ``min_ground_px`` of ground rows (``d_from`` itself when the ground begins at once) and
+    the grey-level step from the ground to the runway's surface (the smaller of the two sides), or
+    None when the frame cannot tell (no clear difference between the runway and the ground beside
+    it, rows outside the image) or the pavement runs to ``d_to``.
+    """
+    line_left, line_right = left.homogeneous(), right.homogeneous()
+    sd_left = horizon.to_sd(_meet(line_left, _horizon_parallel(horizon, d_from)))
+    sd_right = horizon.to_sd(_meet(line_right, _horizon_parallel(horizon, d_from)))
+    k_centre = (0.5 * (sd_left[0] + sd_right[0]) - s0) / d_from
+    if not (math.isfinite(k_centre) and math.isfinite(surface_level) and d_to - d_from >= 3.0 * step_d_px):
+        return None
+    depths = np.arange(d_from + step_d_px, d_to, step_d_px)
+    v2 = horizon.perpendicular_vanishing_point_h(s0)
+    centre = horizon.pencil_point(s0, k_centre, depths)
+    transverse = np.cross(np.concatenate([centre, np.ones((len(depths), 1))], axis=1), v2)
+    ends_left, ends_right = _meet(transverse, line_left), _meet(transverse, line_right)
+    parts = (np.linspace(0.15, 0.85, 15), np.linspace(-0.4, -0.15, 6), np.linspace(1.15, 1.4, 6))
+    fractions = np.concatenate(parts)
+    grid = ends_left[:, None, :] + fractions[None, :, None] * (ends_right - ends_left)[:, None, :]
+    height, width = image.shape
+    inside = np.isfinite(grid).all(axis=-1) & (grid[..., 0] >= 0) & (grid[..., 0] <= width - 1) \
+        & (grid[..., 1] >= 0) & (grid[..., 1] <= height - 1)
+    rows_ok = inside.all(axis=1)
+    if rows_ok.sum() < 3:
+        return None
+    maps = (np.where(inside, grid[..., 0], 0).astype(np.float32), np.where(inside, grid[..., 1], 0).astype(np.float32))
+    values = cv2.remap(np.ascontiguousarray(image, dtype=np.float32), maps[0], maps[1], cv2.INTER_LINEAR)
+    n0, n1 = len(parts[0]), len(parts[0]) + len(parts[1])
+    middle = np.median(values[:, :n0], axis=1)
+    beside = (np.median(values[:, n0:n1], axis=1), np.median(values[:, n1:], axis=1))
+    pavement = rows_ok.copy()
+    contrasts = []
+    for side in beside:
+        contrast = surface_level - float(np.median(side[rows_ok]))
+        if not abs(contrast) >= min_step:
+            return None
+        pavement &= (middle - side) * math.copysign(1.0, contrast) > 0.5 * abs(contrast)
+        contrasts.append(abs(contrast))
+    ground = rows_ok & ~pavement
+    need = max(1, int(round(min_ground_px / step_d_px)))
+    run = 0
+    for i, g in enumerate(ground):
+        run = run + 1 if g else 0
+        if run >= need:
+            first = i - need + 1
+            depth = float(d_from) if first == 0 else float(depths[first] - 0.5 * step_d_px)
+            return depth, min(contrasts)
+        if not rows_ok[i]:
+            return None
+    return None
+

@@ -121,3 +121,38 @@ def test_pavement_before_the_threshold_does_not_move_the_threshold(pre_threshold
     assert result.found and result.corners_found[:2].all(), result.reason
     assert np.linalg.norm(result.corners_uv[:2] - labels.corners_uv[0, :2], axis=1).max() < 1.0
     assert "inside the pavement" not in result.reason
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("pre_threshold_m", [0.0, 150.0])
+def test_ground_begins_where_the_pavement_does(pre_threshold_m):
+    """From the true threshold, the ground is found to begin at once on a plain runway, and where
+    the pavement before it begins (x = -150 m, projected in closed form) on a blast pad: the check
+    that withholds a threshold found inside the pavement (a patch's edge)."""
+    from tests.helpers.detection_frames import airport_frame
+    from tests.helpers.raycast_airport import PaintedAirport
+    from visland.camera import CameraModel
+    from visland.detection.horizon import horizon_frame
+    from visland.detection.refine import PixelLine
+    from visland.detection.threshold_marking import ground_begins
+    from visland.features import batch_R_camera_from_runway
+
+    camera = CameraModel.default(768)
+    scene = PaintedAirport(seed=4, pre_threshold_m=pre_threshold_m)
+    image, state, labels = airport_frame("thesis-3", 600.0, camera, scene)
+    horizon = horizon_frame(camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    corners = labels.corners_uv[0]
+    left = PixelLine(corners[0], (corners[2] - corners[0]) / np.linalg.norm(corners[2] - corners[0]))
+    right = PixelLine(corners[1], (corners[3] - corners[1]) / np.linalg.norm(corners[3] - corners[1]))
+    s0 = float(horizon.to_sd(corners[2])[0] - (horizon.to_sd(corners[0])[0] - horizon.to_sd(corners[2])[0])
+               * horizon.to_sd(corners[2])[1] / (horizon.to_sd(corners[0])[1] - horizon.to_sd(corners[2])[1]))
+    d_threshold = float(horizon.to_sd(corners[:2])[:, 1].mean())
+    R = batch_R_camera_from_runway(state.roll_rad, state.pitch_rad, state.dpsi_rad, camera.mount_rpy_rad)[0]
+    uv, _ = camera.project(R @ (np.array([-pre_threshold_m, 0.0, 0.0]) - state.p_runway_m[0]))
+    d_start = float(horizon.to_sd(uv)[1])
+    found = ground_begins(image, horizon, s0, left, right, d_threshold, d_threshold + 80.0,
+                          surface_level=scene.runway_grey, min_step=8.0)
+    assert found is not None
+    depth, step = found
+    assert abs(depth - d_start) < 1.0, (depth, d_start, d_threshold)
+    assert 10.0 < step < 40.0          # grass 105 +- 12 against the runway's 78
