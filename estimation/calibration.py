@@ -141,7 +141,13 @@ class MountCalibration:
 def mount_error_jacobian(mount_rpy_rad) -> np.ndarray:
     """``J``: body-axes rotation vector of a small change of the ZYX mount angles (roll, pitch, yaw),
     shape (3, 3) for one mounting, (n, 3, 3) for an (n, 3) array:
-    ``J = [Rz(y) Ry(p) e_x, Rz(y) e_y, e_z]``."""
+    ``J = [Rz(y) Ry(p) e_x, Rz(y) e_y, e_z]``.
+
+    Parameters
+    ----------
+    mount_rpy_rad : array_like, shape (3,) or (n, 3)
+        The mounting's roll, pitch and yaw, radians.
+    """
     mount = np.asarray(mount_rpy_rad, dtype=float)
     pitch, yaw = mount[..., 1], mount[..., 2]
     cp, sp, cy, sy = np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
@@ -153,7 +159,17 @@ def mount_error_jacobian(mount_rpy_rad) -> np.ndarray:
 
 
 def batch_R_body_from_camera(mount_rpy_rad) -> np.ndarray:
-    """:func:`visland.frames.R_body_from_camera` for an (n, 3) array of mountings, shape (n, 3, 3)."""
+    """:func:`visland.frames.R_body_from_camera` for an (n, 3) array of mountings, shape (n, 3, 3).
+
+    Parameters
+    ----------
+    mount_rpy_rad : array_like, shape (n, 3)
+        Roll, pitch and yaw of each mounting relative to the body, radians.
+
+    Returns
+    -------
+    ndarray, shape (n, 3, 3)
+    """
     mount = np.asarray(mount_rpy_rad, dtype=float)
     zero = R_body_from_camera((0.0, 0.0, 0.0))
     R = batch_R_runway_from_body(mount[:, 0], mount[:, 1], mount[:, 2])      # Rz(y) Ry(p) Rx(r)
@@ -348,6 +364,7 @@ def estimate_mount_error(t_s, near_uv_px, far_uv_px, roll_rad, pitch_rad, headin
     roll_rad, pitch_rad, heading_rad : (m,) inertial attitude at the frames.
     position_ned_m : (m, 3) the inertial velocity integrated to the frame times (any origin).
     camera : the nominal camera (``camera.json``).
+    params : :class:`CalibrationParams` (default its defaults).
     passes : the epipolar constraint's second-order terms are not negligible against its
         first-order ones (the two bearings nearly coincide), so the measurements are
         re-linearised at the previous pass's causal estimate (the one of the frame before:

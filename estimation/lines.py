@@ -119,6 +119,17 @@ def ccpi_correction(blocks: list, e, k1: float, k2: float, floor: float) -> list
     ``(J^T J + floor e5 e5^T) dx = J^T kappa`` by the Schur complement on the eta entry, using
     the block-diagonal structure of ``D`` (one 2x2 block per edge). ``blocks`` is
     :func:`_edge_blocks` at the estimate. Returns ``dx`` (5 floats).
+
+    Parameters
+    ----------
+    blocks : list
+        :func:`_edge_blocks` at the estimate: per edge ``(Phi_theta, Phi_rho, D_k, dPhi_k)``.
+    e : sequence of 4 floats
+        Output error ``y - y_hat`` (theta, rho of each edge).
+    k1, k2 : float
+        High-gain coefficients of the output and derivative rows.
+    floor : float
+        Damping of the left inverse on the eta entry, (m/s)^2.
     """
     # A = I + D^T D (block diagonal), b = D^T Phi, r_y = k1 e + k2 D^T e, r_eta = k2 Phi . e
     Ainv_r = []
@@ -162,6 +173,19 @@ def cccj_increment(blocks: list, eta: float, w, r, epsilon_sq: float) -> list:
     ``d_eta = (r3 - c . dy + Phi . q) / (psi + |Phi|^2)``, ``c`` the first four entries of the
     last row: the determinant ``psi + |Phi|^2`` never vanishes. ``blocks`` is :func:`_edge_blocks`
     at the estimate. Returns ``[dy (4), d_eta, dw (4)]``.
+
+    Parameters
+    ----------
+    blocks : list
+        The edge blocks at the estimate.
+    eta : float
+        ``1/dH`` estimate, 1/m.
+    w : sequence of 4 floats
+        The completion state ``w``.
+    r : sequence of 9 floats
+        Right-hand side.
+    epsilon_sq : float
+        ``epsilon^2`` of 4.82, (m/s)^2.
     """
     phi = [blocks[0][0], blocks[0][1], blocks[1][0], blocks[1][1]]
     phi_sq = phi[0] ** 2 + phi[1] ** 2 + phi[2] ** 2 + phi[3] ** 2
@@ -187,7 +211,25 @@ def cccj_increment(blocks: list, eta: float, w, r, epsilon_sq: float) -> list:
 
 
 def cccj_jacobian(y, eta: float, w, u: tuple, epsilon_sq: float) -> np.ndarray:
-    """The full 9x9 completed Jacobian of thesis 4.93 (for the tests and for readers)."""
+    """The full 9x9 completed Jacobian of thesis 4.93 (for the tests and for readers).
+
+    Parameters
+    ----------
+    y : sequence of 4 floats
+        The two edges ``[theta_l, rho_l, theta_r, rho_r]``.
+    eta : float
+        ``1/dH``, 1/m.
+    w : sequence of 4 floats
+        The completion state.
+    u : tuple
+        Inputs (:func:`visland.estimation.lines_model.inputs_of`).
+    epsilon_sq : float
+        ``epsilon^2`` of 4.82.
+
+    Returns
+    -------
+    ndarray, shape (9, 9)
+    """
     phi, D, dPhi = _pair_jacobian(y, eta, u)
     phi_sq = float(phi @ phi)
     m = max(epsilon_sq - phi_sq, 0.0)

@@ -74,6 +74,15 @@ def inputs_of(inp) -> tuple:
     ``v`` camera velocity in C, ``w`` camera angular velocity in C, ``n`` runway down axis in C
     (thesis 3.33), ``v3`` the velocity along ``n`` that drives ``eta' = v3 eta^2`` (``n . v``: the
     runway-axes z velocity on a level runway, the rate of the distance to a sloped runway's plane).
+
+    Parameters
+    ----------
+    inp : visland.estimation.base.ObserverInput
+        One step's input.
+
+    Returns
+    -------
+    tuple of 10 floats
     """
     v = inp.v_camera_mps.tolist()
     w = inp.omega_camera_rps.tolist()
@@ -86,7 +95,19 @@ def inputs_of(inp) -> tuple:
 
 
 def edge_terms(theta: float, rho: float, u: tuple) -> tuple:
-    """``(g_theta, g_rho, Phi_theta, Phi_rho)`` of one edge (thesis 3.37, SPEC sign of Phi)."""
+    """``(g_theta, g_rho, Phi_theta, Phi_rho)`` of one edge (thesis 3.37, SPEC sign of Phi).
+
+    Parameters
+    ----------
+    theta, rho : float
+        The edge in the SPEC chart (radians; normalised coordinates).
+    u : tuple
+        The inputs ``(v0, v1, v2, w0, w1, w2, n0, n1, n2, v3)`` of :func:`inputs_of` (m/s, rad/s, unit normal).
+
+    Returns
+    -------
+    g_theta, g_rho, Phi_theta, Phi_rho : float
+    """
     v0, v1, v2, w0, w1, w2, n0, n1, n2 = u[:9]
     c = math.cos(theta)
     s = math.sin(theta)
@@ -102,6 +123,13 @@ def edge_terms_and_jacobian(theta: float, rho: float, u: tuple) -> tuple:
 
     Returns ``(g_theta, g_rho, Phi_theta, Phi_rho, Jg, JPhi)`` where ``Jg`` and ``JPhi`` are
     2x2 nested tuples ``((d./dtheta, d./drho) for (theta row, rho row))``.
+
+    Parameters
+    ----------
+    theta, rho : float
+        One edge, SPEC chart.
+    u : tuple
+        As in :func:`edge_terms`.
     """
     v0, v1, v2, w0, w1, w2, n0, n1, n2 = u[:9]
     c = math.cos(theta)
@@ -124,6 +152,15 @@ def pair_model(y, eta: float, u: tuple) -> tuple:
     """Right-hand side of thesis 3.39 and 4.14 for the state ``(y, eta)``.
 
     Returns ``(ydot (list of 4), etadot, Phi (list of 4))``.
+
+    Parameters
+    ----------
+    y : sequence of 4 floats
+        ``[theta_l, rho_l, theta_r, rho_r]`` of the two edges.
+    eta : float
+        ``1/dH``, 1/m.
+    u : tuple
+        Inputs of :func:`inputs_of`.
     """
     gtl, grl, ptl, prl = edge_terms(y[0], y[1], u)
     gtr, grr, ptr, prr = edge_terms(y[2], y[3], u)
@@ -132,7 +169,19 @@ def pair_model(y, eta: float, u: tuple) -> tuple:
 
 
 def pair_observability(y, u: tuple) -> float:
-    """Thesis 3.40: ``sum Phi_i^2`` of the two edges, (m/s)^2 (Phi multiplies eta = 1/dH)."""
+    """Thesis 3.40: ``sum Phi_i^2`` of the two edges, (m/s)^2 (Phi multiplies eta = 1/dH).
+
+    Parameters
+    ----------
+    y : sequence of 4 floats
+        The two edges, ``[theta_l, rho_l, theta_r, rho_r]``.
+    u : tuple
+        Inputs (:func:`inputs_of`).
+
+    Returns
+    -------
+    float
+    """
     _, _, ptl, prl = edge_terms(y[0], y[1], u)
     _, _, ptr, prr = edge_terms(y[2], y[3], u)
     return ptl * ptl + prl * prl + ptr * ptr + prr * prr
@@ -143,6 +192,13 @@ def align_to(theta: float, rho: float, theta_ref: float) -> tuple:
 
     ``(rho, theta)`` and ``(-rho, theta +- pi)`` are the same line (SPEC chart,
     :func:`visland.camera.wrap_line_chart`). Returns ``(theta, rho)``.
+
+    Parameters
+    ----------
+    theta, rho : float
+        A line in any chart representative (radians; normalised coordinates).
+    theta_ref : float
+        The reference angle, radians.
     """
     while theta - theta_ref > 0.5 * _PI:
         theta -= _PI
@@ -158,6 +214,17 @@ def measured_pair(lines, y_ref) -> list:
 
     Each edge is written in the chart representative nearest the reference ``y_ref``
     (:func:`align_to`).
+
+    Parameters
+    ----------
+    lines : array_like, shape (2, 2)
+        ``[[rho_l, theta_l], [rho_r, theta_r]]`` as measured.
+    y_ref : sequence of 4 floats
+        The reference ``[theta_l, rho_l, theta_r, rho_r]`` (the estimate).
+
+    Returns
+    -------
+    list of 4 floats
     """
     (rho_l, theta_l), (rho_r, theta_r) = lines.tolist()
     theta_l, rho_l = align_to(theta_l, rho_l, y_ref[0])
@@ -172,6 +239,19 @@ def ii_edge_integral(theta: float, rho: float, theta_hat: float, rho_hat: float,
     The I&I function is ``beta = lambda * sum over both edges`` of this value; its gradient in
     the measurement is ``lambda * (Phi_theta(theta, rho_hat), Phi_rho(theta_hat, rho))``
     (:func:`ii_edge_gradient`).
+
+    Parameters
+    ----------
+    theta, rho : float
+        The measured edge (SPEC chart).
+    theta_hat, rho_hat : float
+        The filter's estimate of it.
+    u : tuple
+        Inputs (:func:`inputs_of`).
+
+    Returns
+    -------
+    float
     """
     v0, v1, v2, _, _, _, n0, n1, n2 = u[:9]
     c = math.cos(theta)
@@ -196,6 +276,17 @@ def ii_edge_gradient(theta: float, rho: float, theta_hat: float, rho_hat: float,
 
     This is thesis 4.23: ``Phi(y)`` minus a mismatch that vanishes with the filter error
     (:func:`ii_edge_mismatch`).
+
+    Parameters
+    ----------
+    theta, rho, theta_hat, rho_hat : float
+        Measured edge and the filter's estimate, as in :func:`ii_edge_integral`.
+    u : tuple
+        Inputs.
+
+    Returns
+    -------
+    d_dtheta, d_drho : float
     """
     _, _, p_theta, _ = edge_terms(theta, rho_hat, u)
     _, _, _, p_rho = edge_terms(theta_hat, rho, u)
@@ -210,6 +301,15 @@ def ii_edge_mismatch(theta: float, rho: float, theta_hat: float, rho_hat: float,
     ``Delta_theta = A(theta) v2`` exactly (Phi_theta is affine in rho); ``Delta_rho`` is the divided
     difference in theta (the thesis writes it with a cardinal sine, 4.34-4.35), its limit
     ``dPhi_rho/dtheta`` when the two thetas coincide. Returns ``(Delta_theta, Delta_rho)``.
+
+    Parameters
+    ----------
+    theta, rho : float
+        Measured edge.
+    theta_hat, rho_hat : float
+        Estimated edge.
+    u : tuple
+        The step's inputs.
     """
     v0, v1, v2, _, _, _, n0, n1, n2 = u[:9]
     delta_theta = (n0 * math.sin(theta) - n1 * math.cos(theta)) * v2

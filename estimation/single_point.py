@@ -44,7 +44,17 @@ ACADEMIC_X0_HAT = np.array([0.4, 0.6, 1.0])
 
 @dataclass(frozen=True)
 class SinglePointParams(ObserverParams):
-    """Seed 001 high-gain tuning (section 4.1): damping xi, pulsation omega, alpha, lambda1, lambda2."""
+    """Seed 001 high-gain tuning (section 4.1): damping xi, pulsation omega, alpha, lambda1, lambda2.
+
+    Attributes
+    ----------
+    damping, omega_rad_s : float
+        Damping xi and pulsation omega (rad/s) of the high-gain correction.
+    alpha : float
+        The seed's alpha.
+    lambda1, lambda2 : float
+        The seed's lambda_1 and lambda_2.
+    """
 
     damping: float = 0.99
     omega_rad_s: float = 7.0
@@ -59,7 +69,19 @@ class SinglePointParams(ObserverParams):
 
 @dataclass
 class SinglePointEstimate:
-    """``x_hat`` (3,), the depth estimate ``x3``, and the observability index ``det dPsi/dx``."""
+    """One step of :class:`SinglePointObserver`.
+
+    Attributes
+    ----------
+    t_s : float
+        Time, seconds.
+    x_hat : ndarray, shape (3,)
+        The state estimate.
+    depth : float
+        The depth estimate ``x3``.
+    observability : float
+        The observability index ``det dPsi/dx``.
+    """
 
     t_s: float
     x_hat: np.ndarray
@@ -68,7 +90,21 @@ class SinglePointEstimate:
 
 
 def psi_jacobian(x, A, B) -> np.ndarray:
-    """``dPsi/dx`` for ``Psi = (y1, y1', y2)`` at ``x`` (rows in that order), shape (3, 3)."""
+    """``dPsi/dx`` for ``Psi = (y1, y1', y2)`` at ``x`` (rows in that order), shape (3, 3).
+
+    Parameters
+    ----------
+    x : array_like, shape (3,)
+        The state.
+    A : array_like, shape (3, 3)
+        The system matrix of ``x' = A x + B``.
+    B : array_like, shape (3,)
+        Its constant input.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+    """
     x1, x2, x3 = float(x[0]), float(x[1]), float(x[2])
     xdot = A @ x + B
     g = xdot[0] * x3 - x1 * xdot[2]
@@ -87,6 +123,11 @@ class SinglePointObserver:
     ``reset(t_s, x_hat0)`` sets the initial guess; ``step(t_s, y, A, B)`` integrates the observer
     from the previous time to ``t_s`` (classical RK4, ``y``, ``A`` and ``B`` held over the step)
     and returns a :class:`SinglePointEstimate`. A NaN measurement coasts on the model.
+
+    Parameters
+    ----------
+    params : SinglePointParams, optional
+        Tuning (default :class:`SinglePointParams`).
     """
 
     def __init__(self, params: SinglePointParams | None = None):
@@ -147,7 +188,17 @@ class SinglePointObserver:
 
 @dataclass
 class AcademicResult:
-    """Trajectories of the academic example: ``t_s (n,)``, ``x (n, 3)`` truth, ``x_hat (n, 3)``."""
+    """Trajectories of the academic example.
+
+    Attributes
+    ----------
+    t_s : ndarray, shape (n,)
+        Times, seconds.
+    x, x_hat : ndarray, shape (n, 3)
+        Truth and estimate.
+    observability : ndarray, shape (n,)
+        ``det dPsi/dx`` along the run.
+    """
 
     t_s: np.ndarray
     x: np.ndarray
@@ -166,6 +217,23 @@ def academic_example(duration_s: float = 5.0, dt_s: float = 1e-3, noise_fraction
 
     ``noise_fraction`` adds the seed's "1 % random noise" (Gaussian, relative to each measured
     coordinate) when non-zero.
+
+    Parameters
+    ----------
+    duration_s : float, default 5
+        Simulated time, seconds.
+    dt_s : float, default 0.001
+        Step, seconds.
+    noise_fraction : float, default 0
+        Relative measurement noise (0.01: the seed's 1 %).
+    seed : int, default 0
+        Seed of the noise generator.
+    params : SinglePointParams, optional
+        Tuning.
+
+    Returns
+    -------
+    AcademicResult
     """
     from scipy.linalg import expm
     if not (math.isfinite(duration_s) and duration_s > 0 and math.isfinite(dt_s) and 0 < dt_s <= 0.1):

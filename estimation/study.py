@@ -94,7 +94,27 @@ SLOW_5PX_PARAMS = {
 
 @dataclass(frozen=True)
 class Condition:
-    """How the measurements are degraded (thesis 5.2.2; ECC'15 IV.B)."""
+    """How the measurements are degraded (thesis 5.2.2; ECC'15 IV.B).
+
+    Attributes
+    ----------
+    label : str
+        The row's name in the tables.
+    pixel_noise_px : float
+        Corner noise, pixels (thesis 5.2.2.1).
+    calibration_error_deg : float
+        Camera mounting error, degrees (thesis 5.2.2.2).
+    velocity_bias_fraction : float
+        Relative IMU velocity bias (thesis 5.2.2.3).
+    relative_noise : float
+        Relative noise on the measured coordinates (ECC'15 IV.B: 0.01).
+    params : dict
+        Observer parameters per observer name.
+    slope_pct : float
+        Runway slope, percent.
+    self_calibration : str
+        ``"off"``, ``"check"`` or ``"apply"`` (:func:`visland.estimation.inputs.prepare_inputs`).
+    """
 
     label: str
     pixel_noise_px: float = 0.0
@@ -108,7 +128,24 @@ class Condition:
 
 @dataclass(frozen=True)
 class StudySpec:
-    """One study: which observers, scenarios and degradations, and which thesis table to compare."""
+    """One study: which observers, scenarios and degradations, and which thesis table to compare.
+
+    Attributes
+    ----------
+    name, title : str
+        The study's name (``visland study NAME``) and its heading.
+    observers : tuple of str
+        SPEC observer names.
+    conditions : tuple of Condition
+        The degradations, one table row group each.
+    scenarios : tuple of str
+        Built-in scenarios flown.
+    thesis_table : str, optional
+        The thesis table compared with.
+    kind : str
+        How the study is run and tabulated (``"table"``, ``"std-along"``, ``"ecc"``,
+        ``"calibration"``, ``"robustness"``).
+    """
 
     name: str
     title: str
@@ -190,6 +227,23 @@ def simulate_case(scenario_name: str, condition: Condition, seed: int = 0, headi
     ``heading="dF"`` (default) takes the heading deviation from the measured d_F as ``visland
     estimate`` does; ``heading="truth"`` gives the observers the d_F of the noise-free image (the
     heading deviation known, as in the thesis's simulations), everything else unchanged.
+
+    Parameters
+    ----------
+    scenario_name : str
+        A built-in scenario.
+    condition : Condition
+        The degradations.
+    seed : int, default 0
+        Seed of the noise generators.
+    heading : str, default "dF"
+        ``"dF"`` or ``"truth"``.
+    fps : float, default 25
+        Camera frame rate, Hz.
+
+    Returns
+    -------
+    Case
     """
     if heading not in ("dF", "truth"):
         raise ValueError(f"heading must be 'dF' or 'truth', got {heading!r}")
@@ -273,6 +327,23 @@ def run_study(name: str, out_dir=None, seed: int = 0, heading: str = "dF", echo=
 
     ``heading``: "dF" (the heading deviation measured from the image, as ``visland estimate``) or
     "truth" (known, as in the thesis's simulations); see :func:`simulate_case`.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`STUDY_NAMES`.
+    out_dir : str or Path, optional
+        Folder for plots and study.json (default ``study-NAME``).
+    seed : int, default 0
+        Seed of the noise generators.
+    heading : str, default "dF"
+        As above.
+    echo : callable, default print
+        Where the tables go.
+
+    Returns
+    -------
+    dict
     """
     if name not in STUDIES:
         raise ValueError(f"unknown study '{name}'; known: {', '.join(STUDIES)}")

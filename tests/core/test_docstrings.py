@@ -34,8 +34,10 @@ DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.clocks", "vi
                       "visland.tracking.template", "visland.tracking.tracker",
                       "visland.estimation.base", "visland.estimation.command", "visland.estimation.deviations",
                       "visland.estimation.ecc", "visland.estimation.kalman", "visland.estimation.metrics",
+                      "visland.estimation.calibration", "visland.estimation.lines", "visland.estimation.lines_model",
                       "visland.estimation.points", "visland.estimation.registry", "visland.estimation.runner",
-                      "visland.estimation.thesis_tables", "visland.estimation.tuning", "visland.datasets.sources")
+                      "visland.estimation.single_point", "visland.estimation.study", "visland.estimation.thesis_tables",
+                      "visland.estimation.tuning", "visland.datasets.sources")
 
 
 def _callables(module_names):
