@@ -12,7 +12,9 @@ At every step of the flight model (50 Hz; a camera frame every other step at 25 
 3. the chosen observer (a two-point observer: the glide path needs dX) steps, and its
    dX, dY, dH and the heading deviation give the perceived position and ground velocity that the
    ILS laws of :mod:`visland.flight` (the same laws as ``visland simulate``) turn into orders;
-   ``--truth-guided`` gives the laws the true state instead (the baseline);
+   ``--truth-guided`` gives the laws the true state instead (the baseline: it lands whatever
+   the monitor says of the estimates; a go-around decision is recorded as
+   ``monitor_would_go_around``, not flown);
 4. below the flare height (main gear, :class:`visland.flight.FlareParams`) the flare law takes
    over, its height from the vision estimate or from a simulated radio altimeter (true height
    plus white noise, valid below 50 ft) (``--flare-height-source``);
@@ -358,6 +360,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
     go_around = False
     go_around_reason = ""
     go_around_t = None
+    monitor_would_go_around = ""
     flaring = False
     dh_err_100 = math.nan
     deviations_at = {}
@@ -446,7 +449,10 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
                               "dh_true_m": round(h_true, 3), "dy_true_m": round(float(state.p_runway_m[1]), 3),
                               "dh_points_m": _r(guide_obs.dh_m), "dy_points_m": _r(guide_obs.dy_m),
                               "dh_lines_m": _r(monitor_obs.dh_m), "dy_lines_m": _r(monitor_obs.dy_m)})
-            if not ok:
+            if not ok and options.truth_guided:
+                # the baseline lands whatever the estimators say: the decision is recorded, not flown
+                monitor_would_go_around = monitor_would_go_around or f"{h_ft:g} ft: {why}"
+            elif not ok:
                 go_around, go_around_reason, go_around_t = True, f"{h_ft:g} ft: {why}", t
 
         # ---- orders
@@ -485,6 +491,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
         "sink_rate_mps": float(td["sink_rate_mps"]) if td else None,
         "touchdown_t_s": float(td["t_s"]) if td else None,
         "go_around": go_around, "go_around_reason": go_around_reason,
+        "monitor_would_go_around": monitor_would_go_around,
         "dh_err_100ft_m": dh_err_100 if math.isfinite(dh_err_100) else None,
         "decisions": decisions, "deviations": deviations_at,
         "in_window": bool(gear is not None and 60.0 <= gear[0] <= 823.0 and abs(gear[1]) <= runway.width_m / 2),
@@ -702,9 +709,11 @@ def _landing_row(scenario, source, r) -> dict:
             "crosswind_mps": scenario.wind.crosswind_mps, "gust": int(scenario.wind.gust),
             "touchdown_x_m": r["touchdown_x_m"], "touchdown_y_m": r["touchdown_y_m"],
             "sink_rate_mps": r["sink_rate_mps"], "go_around": int(r["go_around"]),
-            "go_around_reason": r["go_around_reason"], "dh_err_100ft_m": r["dh_err_100ft_m"],
+            "go_around_reason": r["go_around_reason"], "monitor_would_go_around": r.get("monitor_would_go_around", ""),
+            "dh_err_100ft_m": r["dh_err_100ft_m"],
             **{f"{q}_{h}_m": (dev.get(h) or {}).get(q) for h in ("200ft", "100ft", "50ft") for q in ("dy", "dgs")},
             "observability_400ft": (decisions.get("400") or {}).get("observability"),
+            "depth_flow_400ft_px": (decisions.get("400") or {}).get("depth_flow_px"),
             "frames": r["frames"], "measure_s": r["measure_s"], "estimate_s": r["estimate_s"], "wall_s": r["wall_s"]}
 
 
@@ -729,6 +738,8 @@ def _monte_carlo_summary(rows) -> dict:
             "in_window": int(np.sum((x >= 60.0) & (x <= 823.0))) if len(x) else 0,
             "go_arounds": sum(r["go_around"] for r in runs),
             "go_around_reasons": [f"{r['case']}: {r['go_around_reason']}" for r in runs if r["go_around"]],
+            "monitor_would_go_around": [f"{r['case']}: {r['monitor_would_go_around']}" for r in runs
+                                        if r.get("monitor_would_go_around")],
             "touchdown_x_mean_m": float(x.mean()) if len(x) else None,
             "touchdown_x_std_m": float(x.std(ddof=1)) if len(x) > 1 else None,
             "touchdown_y_mean_m": float(y.mean()) if len(y) else None,

@@ -51,6 +51,12 @@ def test_losing_the_runway_below_150_ft_is_a_go_around_at_100_ft():
     assert run["go_around_reason"].startswith("100 ft: runway found in 0%")
 
 
+def test_the_truth_guided_baseline_lands_and_records_what_the_monitor_would_have_decided():
+    run = fly(_short(), FlyOptions(seed=3, detection_lost_below_ft=150.0, truth_guided=True))
+    assert not run["go_around"] and 60.0 <= run["touchdown_x_m"] <= 823.0
+    assert run["monitor_would_go_around"].startswith("100 ft: runway found in 0%")
+
+
 def test_fly_command_ends_with_one_json_line_and_refuses_a_line_observer(capsys, tmp_path):
     scenario = tmp_path / "short.toml"
     scenario.write_text('name = "short"\ndx_m = -1500.0\ndy_m = 20.0\ndgs_m = 0.0\ndpsi_deg = 0.0\ngamma_deg = -3.0\n')
