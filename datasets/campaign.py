@@ -19,8 +19,12 @@ With ``--prune-frames`` (frames not kept, as ``visland demo`` by default) a scen
 and measured in memory (:mod:`visland.datasets.stream`): no PNG is written or decoded, the
 dataset folder holds the metadata only, and the runs are identical to the file route's. With
 ``--scheduler`` such a scenario is one task on the Dask cluster (render, measure, estimate). When
-frames are kept, they are generated as files (on the cluster with ``--scheduler``) and each
-scenario's runs are processed as one task (every source in one decoding pass).
+frames are kept, a scenario not yet generated is streamed the same way while a background writer
+writes its frames (:class:`visland.datasets.stream.FrameWriter`; the folder ends as a complete
+``visland generate`` dataset, and an interrupted one is resumed by ``generate``); a dataset that
+already has frames, or a campaign on a Dask cluster, takes the file route: frames generated as
+files (on the cluster with ``--scheduler``), each scenario's runs processed as one task (every
+source in one decoding pass).
 """
 from __future__ import annotations
 
@@ -123,14 +127,15 @@ def _process_task(dataset: str, run_dirs: dict, observers: tuple) -> str:
     return "\n".join(lines)
 
 
-def _stream_task(job, dataset: str, run_dirs: dict, observers: tuple, workers: int) -> str:
-    """Render one scenario's frames and measure them in memory with every source it still needs
-    (module-level so that Dask can ship it to a worker; see :mod:`visland.datasets.stream`)."""
+def _stream_task(job, dataset: str, run_dirs: dict, observers: tuple, workers: int, keep_frames: bool = False) -> str:
+    """Render one scenario's frames and measure them in memory with every source it still needs,
+    the frames written by a background writer when kept (module-level so that Dask can ship it to
+    a worker; see :mod:`visland.datasets.stream`)."""
     from visland.datasets.process import ProcessOptions
     from visland.datasets.stream import stream_process
     lines: list[str] = []
     stream_process(job, dataset, run_dirs, ProcessOptions(observers=observers, quiet=True), workers=workers,
-                   echo=lines.append)
+                   echo=lines.append, keep_frames=keep_frames)
     return "\n".join(lines)
 
 
@@ -202,18 +207,21 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
             sim_options = simulation_options_from_args(_Args, camera=CameraModel.default(options.size))
             job = GenerateJob(scenario=scenario, options=sim_options, scene=scene,
                               png_compression=options.png_compression)
-            if options.prune_frames and not _has_frames(dataset):
-                # frames not kept: render and measure in memory, no PNG round trip
+            keep_streamed = not options.prune_frames and client is None and not dataset.exists()
+            if (options.prune_frames and not _has_frames(dataset)) or keep_streamed:
+                # render and measure in memory, no PNG round trip; frames kept (written by a
+                # background writer, the folder then a complete dataset) only when asked
                 echo(f"[{time.perf_counter() - started:6.0f} s] render and measure {scenario.name} in memory "
                      f"({options.size} px, {options.fps:g} Hz) with {', '.join(todo)}"
-                     + (f" on {options.scheduler}" if client is not None else ""))
+                     + (f" on {options.scheduler}" if client is not None else "")
+                     + (", frames kept" if keep_streamed else ""))
                 if client is not None:
                     text = client.gather(client.submit(_stream_task, job, str(dataset), todo, observers, 1,
                                                        pure=False))
                 else:
-                    text = _stream_task(job, str(dataset), todo, observers, options.workers)
+                    text = _stream_task(job, str(dataset), todo, observers, options.workers, keep_streamed)
                 for line in text.splitlines():
-                    if "frames: runway found" in line or "in memory in" in line:
+                    if "frames: runway found" in line or "in memory in" in line or "background writer" in line:
                         echo("         " + line)
                 continue
             if _is_streamed(dataset):                     # metadata of an earlier streamed run: generate anew

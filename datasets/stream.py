@@ -25,6 +25,7 @@ decodes each frame once for every source):
 """
 from __future__ import annotations
 
+import os
 import queue
 import threading
 import time
@@ -268,8 +269,15 @@ def stream_process(job, dataset_dir, run_dirs: dict, options, workers: int = 1, 
     from visland.datasets.generate import dataset_manifest
     from visland.datasets.process import process_many
     from visland.simulate import run_simulation
+    from visland.datasets.generate import JOB_FILE
     started = time.perf_counter()
+    started_epoch = time.time()
     result = run_simulation(job.scenario, job.options)
+    if keep_frames:
+        # as visland generate: the job's identity first, so that an interrupted run is resumed by
+        # generate_dataset (frames are written atomically: a frame file that exists is complete)
+        Path(dataset_dir).mkdir(parents=True, exist_ok=True)
+        atomic_write_text(Path(dataset_dir) / JOB_FILE, json.dumps(job.identity(), indent=2) + "\n")
     write_dataset_files(result, dataset_dir)
     writer = FrameWriter(Path(dataset_dir) / "frames", job.png_compression, threads=writer_threads) \
         if keep_frames else None
@@ -295,6 +303,9 @@ def stream_process(job, dataset_dir, run_dirs: dict, options, workers: int = 1, 
             write_lard_labels(Path(dataset_dir) / "lard" / "labels.csv", rows)
         atomic_write_text(Path(dataset_dir) / "manifest.json",
                           json.dumps(dataset_manifest(job, result, writer.digests), indent=1) + "\n")
+        # dated when the dataset's content was fixed (before the runs), as a campaign compares them
+        os.utime(Path(dataset_dir) / "manifest.json", (started_epoch, started_epoch))
+        (Path(dataset_dir) / JOB_FILE).unlink()
         echo(f"frames kept by the background writer: {writer.encode_s:.1f} s of PNG encoding and writing, "
              f"rendering and measuring waited {writer.blocked_s:.1f} s on it, {writer.tail_s:.1f} s after the "
              f"last frame")

@@ -241,7 +241,11 @@ def test_campaign_resumes_without_redoing_work(tmp_path, capsys):
             "--observer", "ccpi-hg-2p", "--workers", "1", "--out", str(tmp_path / "camp")]
     assert main(args) == 0
     first = capsys.readouterr().out
-    assert "generate short" in first and "process short with detection" in first
+    assert "render and measure short in memory (128 px, 2 Hz) with detection, frames kept" in first
+    assert "frames kept by the background writer" in first
+    manifest = json.loads((tmp_path / "camp" / "datasets" / "short" / "manifest.json").read_text())
+    assert manifest["kind"] == "dataset" and len(manifest["frames"]) == len(
+        list((tmp_path / "camp" / "datasets" / "short" / "frames").iterdir()))
     assert main(args) == 0
     second = capsys.readouterr().out
     assert "every run up to date, kept" in second and "generate short" not in second
