@@ -68,6 +68,23 @@ def process_batch(inputs, out_dir, options, force: bool = False, echo=print, wor
     ``workers``: inputs processed at once in worker processes (1: one after the other, here);
     ``scheduler``: a Dask scheduler address, each input one task on the cluster. Returns the
     index: ``{"runs": [{"input", "name", "status", "reason" or figures...}], ...}``.
+
+    Parameters
+    ----------
+    inputs : sequence of str or Path
+        Frame folders or videos.
+    out_dir : str or Path
+        The batch folder (one run per input, index.html, the comparison).
+    options : visland.datasets.process.ProcessOptions
+        What each run does.
+    force : bool, default False
+        Replace an existing ``out_dir``.
+    echo : callable, default print
+        Where progress lines go.
+    workers : int, default 1
+        Local worker processes.
+    scheduler : str, optional
+        A Dask scheduler address.
     """
     from dataclasses import replace
     if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= 64:

@@ -38,7 +38,25 @@ QUANTITIES = (("dh_m", "dh_m", "dH"), ("dy_m", "dy_m", "dY"), ("dx_m", "dx_m", "
 
 @dataclass
 class RunResult:
-    """One processed run: its identity and per-observer estimate series at the frames."""
+    """One processed run: its identity and per-observer estimate series at the frames.
+
+    Attributes
+    ----------
+    path : Path
+        The run folder.
+    source : str
+        Its measurement source (detection, tracking, anchored, ideal).
+    scenario : str
+        The scenario or input it processed.
+    truth : dict of str to ndarray
+        ``truth.csv``'s columns (metres, degrees).
+    series : dict
+        Observer -> arrays ``t_s``, ``dh_m``, ``dy_m``, ``dx_m`` at the frames.
+    start_t_s : dict of str to float
+        Observer -> its start (metrics.json); absent: the first estimate.
+    diverged : dict of str to str
+        Observer -> why it was cut off (run.json ``diverged``).
+    """
 
     path: Path
     source: str
@@ -50,7 +68,17 @@ class RunResult:
 
 
 def load_run(path) -> RunResult:
-    """Read a ``visland process`` output folder (errors name the file)."""
+    """Read a ``visland process`` output folder (errors name the file).
+
+    Parameters
+    ----------
+    path : str or Path
+        A run folder (run.json, estimates.csv, truth.csv).
+
+    Returns
+    -------
+    RunResult
+    """
     path = Path(path)
     if not path.is_dir():
         raise ValueError(f"{path}: run folder not found")
@@ -110,7 +138,17 @@ def _observer_starts(metrics_path: Path) -> dict:
 
 def run_figures(run: RunResult) -> dict:
     """``{observer: {"dH": {conv_time_5pct_s, conv_time_5pct_to_end_s, err_400ft_m, ...}, "dY": {...},
-    "dX": {...}}}``, by :mod:`visland.estimation.metrics`."""
+    "dX": {...}}}``, by :mod:`visland.estimation.metrics`.
+
+    Parameters
+    ----------
+    run : RunResult
+        A loaded run.
+
+    Returns
+    -------
+    dict
+    """
     from visland.estimation.metrics import convergence_time_s, errors_at_heights
     out = {}
     t_s, dh_true = run.truth["t_s"], run.truth["dh_m"]
@@ -139,7 +177,21 @@ def _fmt(value, digits=3):
 
 
 def compare_runs(run_paths, out_dir, echo=print) -> dict:
-    """Build the comparison of ``run_paths`` into ``out_dir``; return its figures."""
+    """Build the comparison of ``run_paths`` into ``out_dir``; return its figures.
+
+    Parameters
+    ----------
+    run_paths : sequence of str or Path
+        The ``visland process`` run folders.
+    out_dir : str or Path
+        Where compare.md, compare.json, compare.csv and the plots go.
+    echo : callable, default print
+        Where the tables go.
+
+    Returns
+    -------
+    dict
+    """
     from visland.estimation.metrics import FT_TO_M, METRIC_DEFINITIONS, METRIC_HEIGHTS_FT, aggregate_at_100ft
     from visland.userfiles import check_output_folder
     out_dir = check_output_folder(out_dir, force=True)         # compare adds its files to a folder

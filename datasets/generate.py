@@ -62,7 +62,18 @@ MAX_WORKERS = 64
 
 
 def frame_name(index: int) -> str:
-    """File name of frame ``index`` inside ``frames/``."""
+    """File name of frame ``index`` inside ``frames/``.
+
+    Parameters
+    ----------
+    index : int
+        0-based frame index.
+
+    Returns
+    -------
+    str
+        Six digits and ``.png``.
+    """
     return f"{index:06d}.png"
 
 
@@ -115,7 +126,21 @@ class GenerateJob:
 
 @dataclass
 class GenerateReport:
-    """What a run did."""
+    """What a run did.
+
+    Attributes
+    ----------
+    out_dir : Path
+        The dataset folder.
+    n_frames : int
+        Frames in the dataset.
+    rendered, reused : int
+        Frames rendered by this run, and kept from an interrupted one.
+    seconds : float
+        Wall time, seconds.
+    already_complete : bool
+        The folder was complete: nothing was done.
+    """
 
     out_dir: Path
     n_frames: int

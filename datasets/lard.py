@@ -62,7 +62,23 @@ def _camera_angles_lard(states, camera, runway_heading_deg):
 
 
 def lard_rows(result, image_names, designator: str, scenario_name: str) -> list[dict]:
-    """One LARD row per frame of a :class:`visland.simulate.SimulationResult`."""
+    """One LARD row per frame of a :class:`visland.simulate.SimulationResult`.
+
+    Parameters
+    ----------
+    result : visland.simulate.SimulationResult
+        The flown scenario (true camera, frame states, labels).
+    image_names : sequence of str
+        The frame files, one per frame.
+    designator : str
+        The runway's designator as LARD writes it.
+    scenario_name : str
+        Written in each row.
+
+    Returns
+    -------
+    list of dict
+    """
     s = result.frames
     camera = result.camera_true
     p = s.p_runway_m
@@ -105,7 +121,15 @@ def _cell(value) -> str:
 
 
 def write_lard_labels(path, rows) -> None:
-    """Write LARD rows as a ``;``-separated CSV, atomically."""
+    """Write LARD rows as a ``;``-separated CSV, atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        The CSV to write.
+    rows : list of dict
+        From :func:`lard_rows`.
+    """
     buffer = io.StringIO()
     writer = csv.writer(buffer, delimiter=";", lineterminator="\n")
     writer.writerow(LARD_COLUMNS)

@@ -25,7 +25,18 @@ SOURCES = ("detection", "tracking", "anchored", "ideal")
 
 def parse_source(kind: str) -> tuple[str, str | None]:
     """``"tracking"`` or ``"tracking:every_frame"`` (a template update policy of
-    :class:`visland.tracking.TrackerParams`) -> (source, policy or None)."""
+    :class:`visland.tracking.TrackerParams`) -> (source, policy or None).
+
+    Parameters
+    ----------
+    kind : str
+        ``--source`` value.
+
+    Returns
+    -------
+    source : str
+    policy : str or None
+    """
     base, _, policy = str(kind).partition(":")
     if base not in SOURCES:
         raise ValueError(f"--source must be one of {', '.join(SOURCES)} (tracking and anchored may name a template "
@@ -42,7 +53,21 @@ _FEATURE_COLUMNS = [c for c in MEASUREMENT_COLUMNS if c not in ("frame", "t_s", 
 
 @dataclass
 class Measurements:
-    """Measurement rows of a run, with timing and the frames that could not be used."""
+    """Measurement rows of a run, with timing and the frames that could not be used.
+
+    Attributes
+    ----------
+    source : str
+        The measurement source.
+    columns : dict
+        ``measurements.csv`` columns, one value per frame.
+    flagged : list of (int, str)
+        ``(frame, reason)`` of unusable frames.
+    analysis_s : float
+        Seconds in the image analysis proper.
+    wall_s : float
+        Wall time including decoding, seconds.
+    """
 
     source: str
     columns: dict
@@ -135,7 +160,27 @@ def measure(source, kind: str = "detection", detector_params=None, init=None, qu
             windows=None) -> Measurements:
     """Measure every frame of ``source`` with ``kind`` (one of :data:`SOURCES`); ``windows`` (detection
     only): a callable ``windows(source)`` giving what places the search windows (see
-    :func:`_measure_detection`), or None."""
+    :func:`_measure_detection`), or None.
+
+    Parameters
+    ----------
+    source : visland.datasets.sources.FrameSource
+        The frames, camera and telemetry.
+    kind : str, default "detection"
+        A measurement source (``tracking:POLICY`` accepted, :func:`parse_source`).
+    detector_params : visland.detection.DetectorParams, optional
+        For detection and anchored tracking.
+    init : str, optional
+        Tracking designation (``labels`` or ``"u,v;u,v"``).
+    quiet : bool, default False
+        No progress bar.
+    windows : callable, optional
+        As above.
+
+    Returns
+    -------
+    Measurements
+    """
     base, _ = parse_source(kind)
     if base == "ideal":
         return _measure_ideal(source)
@@ -173,6 +218,19 @@ def measure_many(source, kinds, init=None, quiet: bool = False, windows=None) ->
     One thread decodes; each kind consumes the frames in its own thread (OpenCV releases the
     GIL), so a campaign with detection, tracking and anchored tracking pays one decode per
     frame instead of three. Returns ``{kind: Measurements}``.
+
+    Parameters
+    ----------
+    source : visland.datasets.sources.FrameSource
+        The frames.
+    kinds : sequence of str
+        Measurement sources.
+    init : str, optional
+        Tracking designation.
+    quiet : bool, default False
+        No progress bar.
+    windows : callable, optional
+        As in :func:`measure`.
     """
     kinds = list(dict.fromkeys(kinds))
     if len(kinds) == 1 or all(kind == "ideal" for kind in kinds):

@@ -27,7 +27,19 @@ EDGE_SAMPLES = 9
 
 
 def corner_errors_px(measurements, labels) -> dict:
-    """``{corner: (n,) distance in px}`` for the four corners of :data:`visland.runway.CORNER_NAMES`."""
+    """``{corner: (n,) distance in px}`` for the four corners of :data:`visland.runway.CORNER_NAMES`.
+
+    Parameters
+    ----------
+    measurements : visland.contracts.Table
+        Measured corners (pixels), one row per frame.
+    labels : visland.contracts.Table
+        The exact corners and visibility.
+
+    Returns
+    -------
+    dict of str to ndarray, shape (n,)
+    """
     errors = {}
     for name in CORNER_NAMES:
         du = np.asarray(measurements[f"{name}_u_px"], dtype=float) - np.asarray(labels[f"{name}_u_px"], dtype=float)
@@ -39,7 +51,21 @@ def corner_errors_px(measurements, labels) -> dict:
 
 def edge_errors_px(measurements, labels, camera) -> dict:
     """``{"left"|"right": (n,) mean distance in px}`` of the labelled edge's visible points to the
-    measured line; ``camera`` is the :class:`visland.camera.CameraModel` of the frames."""
+    measured line; ``camera`` is the :class:`visland.camera.CameraModel` of the frames.
+
+    Parameters
+    ----------
+    measurements : visland.contracts.Table
+        Measured lines (SPEC chart).
+    labels : visland.contracts.Table
+        The exact corners.
+    camera : visland.camera.CameraModel
+        Intrinsics (normalised coordinates to pixels).
+
+    Returns
+    -------
+    dict of str to ndarray, shape (n,)
+    """
     errors = {}
     for edge, corners in EDGE_CORNERS.items():
         near, far = (np.stack([np.asarray(labels[f"{c}_u_px"], dtype=float),

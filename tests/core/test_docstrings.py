@@ -37,7 +37,9 @@ DOCUMENTED_MODULES = ("visland.exports", "visland.camera", "visland.clocks", "vi
                       "visland.estimation.calibration", "visland.estimation.lines", "visland.estimation.lines_model",
                       "visland.estimation.points", "visland.estimation.registry", "visland.estimation.runner",
                       "visland.estimation.single_point", "visland.estimation.study", "visland.estimation.thesis_tables",
-                      "visland.estimation.tuning", "visland.datasets.sources")
+                      "visland.estimation.tuning", "visland.datasets.batch", "visland.datasets.compare",
+                      "visland.datasets.generate", "visland.datasets.lard", "visland.datasets.measure",
+                      "visland.datasets.pixel_errors", "visland.datasets.report", "visland.datasets.sources")
 
 
 def _callables(module_names):
