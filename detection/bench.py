@@ -6,8 +6,9 @@ consecutive frames (the camera rate) at a few distances from the threshold, in c
 pipeline reads them (grey conversion included in the timings). Acquisition is
 timed on every frame with no previous detection (the whole frame searched); tracking runs
 each sequence in order, every frame detected from the previous one (region of interest).
-Medians of wall time, over ``--repeat`` passes; the last line of the output is one JSON
-object with the figures.
+Medians of wall time and of this process's CPU time, over ``--repeat`` passes; the last line
+of the output is one JSON object with the figures. On a shared machine the CPU time with one
+OpenCV thread (``--threads 1``) is the figure that other sessions' load disturbs least.
 """
 from __future__ import annotations
 
@@ -91,9 +92,37 @@ def render_frames(scenario_name: str, size: int, distances_m, length: int, fps: 
                                           f"{', '.join(f'{d:g}' for d in distances_m)} m from the threshold")
 
 
-def run_bench(frames: BenchFrames, params: DetectorParams | None = None, repeat: int = 3) -> dict:
-    """Time acquisition and tracking on ``frames``; returns the figures."""
-    params = params or DetectorParams()
+def run_bench(frames: BenchFrames, params: DetectorParams | None = None, repeat: int = 3,
+              threads: int | None = None) -> dict:
+    """Time acquisition and tracking on ``frames``; returns the figures.
+
+    Parameters
+    ----------
+    frames : BenchFrames
+        Sequences of consecutive frames with the camera and the inertial attitude.
+    params : DetectorParams, optional
+        Detector parameters (default ``DetectorParams()``).
+    repeat : int
+        Timing passes; medians are taken over them.
+    threads : int, optional
+        OpenCV threads during the timing (``cv2.setNumThreads``; restored afterwards); default
+        OpenCV's own setting. The figures report it as ``opencv_threads``.
+    """
+    import cv2  # heavy import kept local, as in the detector
+    threads_before = cv2.getNumThreads()
+    if threads is not None:
+        cv2.setNumThreads(int(threads))
+    try:
+        figures = _timed(frames, params or DetectorParams(), repeat)
+    finally:
+        opencv_threads = cv2.getNumThreads()
+        cv2.setNumThreads(threads_before)
+    figures["opencv_threads"] = opencv_threads
+    return figures
+
+
+def _timed(frames: BenchFrames, params: DetectorParams, repeat: int) -> dict:
+    """The timing passes of :func:`run_bench`."""
     camera = frames.camera
     acquisition, acquisition_found, acquisition_cpu = [], [], []
     tracking, tracking_found, tracking_mode = [], [], []
@@ -160,5 +189,6 @@ def print_report(frames: BenchFrames, figures: dict) -> None:
           f"{100 * (figures['tracking_found_rate'] or 0):.0f} %, {100 * (figures['tracking_mode_rate'] or 0):.0f} % "
           f"without falling back to the whole frame (target >= 50 frames/s)")
     if figures.get("load_average_1min") is not None:
-        print(f"  machine load average (1 min): {figures['load_average_1min']} on {os.cpu_count()} cores")
+        print(f"  machine load average (1 min): {figures['load_average_1min']} on {os.cpu_count()} cores, "
+              f"{figures.get('opencv_threads')} OpenCV threads")
     print(json.dumps(figures))

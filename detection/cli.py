@@ -43,6 +43,8 @@ def _cmd_bench(args) -> int:
     from visland.detection.bench import frames_from_folder, print_report, render_frames, run_bench
     if args.repeat < 1:
         raise ValueError(f"--repeat must be at least 1, got {args.repeat}")
+    if args.threads is not None and args.threads < 1:
+        raise ValueError(f"--threads must be at least 1, got {args.threads}")
     if args.length < 2:
         raise ValueError(f"--length must be at least 2 frames (tracking needs a previous frame), got {args.length}")
     if args.dir:
@@ -52,7 +54,7 @@ def _cmd_bench(args) -> int:
         if not distances or any(d <= 0 for d in distances):
             raise ValueError(f"--distances must be positive metres separated by commas, got {args.distances!r}")
         frames = render_frames(args.scenario, args.size, distances, args.length)
-    figures = run_bench(frames, _load_params(args.params), repeat=args.repeat)
+    figures = run_bench(frames, _load_params(args.params), repeat=args.repeat, threads=args.threads)
     print_report(frames, figures)
     return 0
 
@@ -106,4 +108,7 @@ def register_bench(bench_subparsers):
     p.add_argument("--sequences", type=int, default=4, metavar="N", help="runs taken from --dir (default 4)")
     p.add_argument("--repeat", type=int, default=3, metavar="N", help="timing passes (default 3)")
     p.add_argument("--params", metavar="FILE", help="detector parameters, JSON or TOML")
+    p.add_argument("--threads", type=int, default=None, metavar="N",
+                   help="OpenCV threads while timing (default OpenCV's own); with 1, the CPU-time figures "
+                        "are the least disturbed by other load on a shared machine")
     p.set_defaults(func=_cmd_bench)

@@ -75,6 +75,19 @@ def test_bench_detect_ends_with_a_json_line(folder, capsys):
     assert figures["target"] == "detect" and figures["frames"] == 2
     for key in ("acquisition_median_s", "tracking_median_ms", "tracking_fps", "tracking_found_rate"):
         assert figures[key] is not None
+    assert figures["opencv_threads"] == cv2.getNumThreads()
+
+
+@pytest.mark.slow
+def test_bench_detect_threads_option_sets_opencv_threads_for_the_run_only(folder, capsys):
+    threads_before = cv2.getNumThreads()
+    assert main(["bench", "detect", "--dir", str(folder), "--sequences", "1", "--length", "2", "--repeat", "1",
+                 "--threads", "1"]) == 0
+    figures = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert figures["opencv_threads"] == 1
+    assert cv2.getNumThreads() == threads_before
+    assert main(["bench", "detect", "--dir", str(folder), "--threads", "0"]) == 2
+    assert "--threads" in capsys.readouterr().err
 
 
 def test_detect_without_telemetry_reads_the_horizon_off_the_frames(tmp_path, capsys):
