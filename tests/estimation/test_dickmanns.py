@@ -240,6 +240,30 @@ def test_params_round_trip_and_validation(tmp_path):
     assert len(STATE_NAMES) == 12
 
 
+
+def test_threshold_sigma_factor_scales_only_the_threshold_line_noise():
+    """R of the threshold line's (theta, rho) grows by factor^2 (segment_line_covariance is linear in
+    sigma^2); the edges' and the horizon's blocks do not move."""
+    from visland.estimation.dickmanns import _vision_rows
+    rng = np.random.default_rng(21)
+    state = _random_states(rng, 1)[0]
+    R_rc = _R_runway_from_camera(0.02, 0.01, 0.05, (0.0, math.radians(-3), 0.0))
+    blocks = []
+    for factor in (1.0, 3.0):
+        observer = make_observer("dickmanns-4d", Dickmanns4DParams(threshold_sigma_factor=factor))
+        H = np.zeros((8, 12))
+        _, M_C, M = _vision_rows(state.tolist(), R_rc.tolist(), (0, 1, 2, 3), H, 0)
+        R = np.zeros((8, 8))
+        observer._vision_covariance(state.tolist(), M, M_C, True, R, 0)
+        blocks.append(R)
+    assert blocks[0][4, 4] > 0
+    np.testing.assert_allclose(blocks[1][4:6, 4:6], 9.0 * blocks[0][4:6, 4:6], rtol=1e-12)
+    np.testing.assert_array_equal(blocks[1][:4, :4], blocks[0][:4, :4])
+    np.testing.assert_array_equal(blocks[1][6:, 6:], blocks[0][6:, 6:])
+    with pytest.raises(ValueError, match="threshold_sigma_factor"):
+        Dickmanns4DParams(threshold_sigma_factor=0.0)
+
+
 # --------------------------------------------------------------------------- the filter
 def _run(prep, result, params=None, error=0.2):
     observer = make_observer("dickmanns-4d", params)
