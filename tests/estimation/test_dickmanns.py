@@ -408,7 +408,8 @@ def test_on_measurements_of_another_camera_made_outside_visland():
     assert heading_rms < np.sqrt(np.mean(input_error ** 2)) + 0.01
 
 
-def test_predicted_lines_for_the_detector_match_the_next_frame():
+def _observer_before_a_frame():
+    """dickmanns-4d run 600 steps into thesis-1 (ideal lines), and the step of the next frame."""
     result = simulation("thesis-1")
     prep = prepared("thesis-1")
     observer = make_observer("dickmanns-4d")
@@ -418,6 +419,11 @@ def test_predicted_lines_for_the_detector_match_the_next_frame():
     for j in range(start + 1, start + 600):
         observer.step(prep.steps[j])
     nxt = next(j for j in range(start + 600, len(prep.steps)) if prep.frame_of_step[j] >= 0)
+    return observer, prep, nxt
+
+
+def test_predicted_lines_for_the_detector_match_the_next_frame():
+    observer, prep, nxt = _observer_before_a_frame()
     predicted = observer.predicted_lines(prep.steps[nxt])
     measured = prep.steps[nxt].lines
     for k, name in enumerate(("left", "right")):
@@ -428,15 +434,7 @@ def test_predicted_lines_for_the_detector_match_the_next_frame():
 def test_predicted_window_points_for_the_detector():
     """near_xy: the next frame's threshold corners (their measured virtual coordinates turned into the
     camera, thesis 3.23); far_xy: points on the predicted edges, further along the runway."""
-    result = simulation("thesis-1")
-    prep = prepared("thesis-1")
-    observer = make_observer("dickmanns-4d")
-    start = prep.first_step_with("lines")
-    dh = -result.frames.p_runway_m[:, 2]
-    observer.reset(prep.steps[start], dh[prep.frame_of_step[start]])
-    for j in range(start + 1, start + 600):
-        observer.step(prep.steps[j])
-    nxt = next(j for j in range(start + 600, len(prep.steps)) if prep.frame_of_step[j] >= 0)
+    observer, prep, nxt = _observer_before_a_frame()
     inp = prep.steps[nxt]
     predicted = observer.predicted_lines(inp)
     rays = np.column_stack([inp.points_yv, np.ones(2)]) @ inp.R_runway_from_camera     # R^T ray, row-wise
@@ -446,7 +444,7 @@ def test_predicted_window_points_for_the_detector():
         x, y = predicted["far_xy"][k]
         assert abs(x * math.cos(theta) + y * math.sin(theta) - rho) < 1e-9
         assert y < predicted["near_xy"][k, 1]                   # further away: higher in the image
-    assert abs(predicted["dpsi_rad"] - result.frames.dpsi_rad[prep.frame_of_step[nxt]]) < math.radians(0.05)
+    assert abs(predicted["dpsi_rad"] - simulation("thesis-1").frames.dpsi_rad[prep.frame_of_step[nxt]]) < math.radians(0.05)
 
 
 # --------------------------------------------------------------------------- the along-track distance
