@@ -137,15 +137,16 @@ def rectify(image, horizon: HorizonFrame, s0: float, k_range: tuple, d_range: tu
     inside = (u >= 0) & (u <= width - 1) & (v >= 0) & (v <= height - 1)
     if not inside.any():
         return None
-    u0 = int(max(0, math.floor(float(u[inside].min())) - 1))
-    v0 = int(max(0, math.floor(float(v[inside].min())) - 1))
-    u1 = int(min(width, math.ceil(float(u[inside].max())) + 2))
-    v1 = int(min(height, math.ceil(float(v[inside].max())) + 2))
+    # extremes over the samples inside the frame (reductions with a mask: no copies)
+    u0 = int(max(0, math.floor(float(u.min(where=inside, initial=np.inf))) - 1))
+    v0 = int(max(0, math.floor(float(v.min(where=inside, initial=np.inf))) - 1))
+    u1 = int(min(width, math.ceil(float(u.max(where=inside, initial=-np.inf))) + 2))
+    v1 = int(min(height, math.ceil(float(v.max(where=inside, initial=-np.inf))) + 2))
     crop = np.asarray(image[v0:v1, u0:u1], dtype=np.float32)
     map_u = np.where(inside, u - np.float32(u0), np.float32(-10.0))
     map_v = np.where(inside, v - np.float32(v0), np.float32(-10.0))
     values = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    values = np.where(inside, values, np.nan).astype(np.float32)
+    values[~inside] = np.nan                  # remap's own float32 output, written in place
     return PencilImage(float(s0), k, d, values)
 
 
