@@ -74,7 +74,8 @@ def _horizon_parallel(horizon: HorizonFrame, depth: float) -> np.ndarray:
 def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                       d_pavement: float, d_far: float, min_step: float, surface_level: float = math.nan,
                       pavement_step: float = 0.0, min_pavement_widths: float = 0.8, max_pavement_widths: float = 12.0,
-                      n_columns: int = 64, step_d_px: float = 0.5) -> ThresholdMarking | None:
+                      n_columns: int = 64, step_d_px: float = 0.5,
+                      min_resolved_px: float = 1.5) -> ThresholdMarking | None:
     """The threshold marking when the pavement before it starts at ``d_pavement`` (module docstring).
 
     Parameters
@@ -99,6 +100,14 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         brighter than the pavement by at least as much.
     min_pavement_widths, max_pavement_widths : float
         The marking must begin between these many runway widths inside the pavement.
+    min_resolved_px : float, optional
+        Depth pixels the first ``min_pavement_widths`` of pavement must span for the marking to
+        be looked for: below it the stripes a threshold at the pavement's start carries (6 m in,
+        30 m long: about 0.83 of that span) cover less than the band test's two lines, their
+        absence cannot be seen, and a marking further in (an aiming-point or touchdown-zone mark,
+        blurred across the width) would be taken for them. Measured on visland's thesis-1 at
+        4.5 km (2048 px camera, 1.0 px for 0.8 widths): the aiming-point marks 9.2 widths in moved
+        the threshold 14 px; the ray-cast blast pad at 900 m (768 px camera, 1.9 px) needs the search.
 
     Returns
     -------
@@ -118,6 +127,8 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     def depth_at(widths):                      # depth of the point `widths` runway widths farther along
         return fx / (fx / d_pavement + widths * width_k)
 
+    if d_pavement - depth_at(min_pavement_widths) < min_resolved_px:
+        return None                              # too far to tell the threshold's own stripes
     d_lo = max(depth_at(max_pavement_widths), d_far + 2.0, 1.0)
     d_hi = d_pavement - 0.5
     if d_hi - d_lo < 4.0:

@@ -156,3 +156,36 @@ def test_ground_begins_where_the_pavement_does(pre_threshold_m):
     depth, step = found
     assert abs(depth - d_start) < 1.0, (depth, d_start, d_threshold)
     assert 10.0 < step < 40.0          # grass 105 +- 12 against the runway's 78
+
+
+@pytest.mark.slow
+def test_aiming_point_marks_far_out_are_not_taken_for_the_threshold_marking():
+    """visland's default scene, thesis-1 4.5 km before the threshold, the SPEC 2048 px camera: the
+    first 0.8 runway widths of pavement span about 1 px of depth, too few to see the threshold's
+    own stripes, and the threshold-marking search took the aiming-point marks 9.2 widths in for
+    them (near corners 14 px off, found). The threshold must stay where the pavement begins."""
+    import os
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+    from visland.camera import CameraModel
+    from visland.detection import detect_runway
+    from visland.features import batch_R_camera_from_runway, ideal_features
+    from visland.flight import simulate_flight
+    from visland.render import FrameRenderer, SceneParams
+    from visland.scenarios import resolve_scenario
+
+    scenario = resolve_scenario("thesis-1")
+    trajectory = simulate_flight(scenario)
+    camera = CameraModel.default(2048)
+    worst = []
+    for distance in (4500.0, 4400.0):
+        t = trajectory.t_s[int(np.argmin(np.abs(-trajectory.p_runway_m[:, 0] - distance)))]
+        state = trajectory.at(np.array([t]))
+        labels = ideal_features(state, scenario.runway, camera)
+        R = batch_R_camera_from_runway(state.roll_rad, state.pitch_rad, state.dpsi_rad, camera.mount_rpy_rad)
+        with FrameRenderer(SceneParams(), camera, scenario.runway) as renderer:
+            rgb = renderer.render(state.p_runway_m[0], R[0], frame_seed=0)
+        result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+        assert "marking" not in result.reason, result.reason
+        if result.found and result.corners_found[:2].all():
+            worst.append(float(np.linalg.norm(result.corners_uv[:2] - labels.corners_uv[0, :2], axis=1).max()))
+    assert worst and max(worst) < 2.0, worst
