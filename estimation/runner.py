@@ -181,12 +181,12 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     last_correction = [float(steps[start].t_s)]
     last_y1 = [math.nan]
 
-    def record(j, estimate):
+    def record(j, estimate, pinned):
         f = frame_of_step[j]
         if f < 0:
             return
         inp = steps[j]
-        if on_domain_bound(estimate.dh_m):
+        if pinned:
             coasting[f] = True
             reason[f] = (f"height on the observer's domain bound (dH = {estimate.dh_m:g} m): not a height, "
                          f"estimate withheld")
@@ -226,7 +226,7 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
 
     observer.reset(steps[start], dh0_m)
     first = _initial_estimate(observer, steps[start], dh0_m)
-    record(start, first)
+    record(start, first, on_domain_bound(first.dh_m))
     step = observer.step
     elapsed = 0.0
     bound_since = math.nan           # time from which the height sits on the domain bound
@@ -238,9 +238,10 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
         estimate = step(steps[j])
         elapsed += time.perf_counter() - t0
         n_steps += 1
+        pinned = on_domain_bound(estimate.dh_m)
         if frame_of_step[j] >= 0:
-            record(j, estimate)
-        if not on_domain_bound(estimate.dh_m):
+            record(j, estimate, pinned)
+        if not pinned:
             bound_since, corrected_on_bound = math.nan, 0
             continue
         t_s = float(steps[j].t_s)

@@ -144,7 +144,7 @@ def estimate_time_offset(source, max_offset_s: float = MAX_OFFSET_S) -> TimeOffs
         raise ValueError(f"{source.name}: the clock offset cannot be fixed ({spread}): too little roll motion "
                          "(straight and level flight says nothing) or a horizon the frames do not show clearly; "
                          "give --time-offset")
-    return TimeOffset(offset_s=offset, sigma_s=sigma, frames_used=len(times), residual_deg=math.degrees(residual),
+    return TimeOffset(offset_s=float(offset), sigma_s=float(sigma), frames_used=len(times), residual_deg=math.degrees(residual),
                       inliers=int(inliers.sum()))
 
 

@@ -29,6 +29,14 @@ def simulated(tmp_path_factory):
     return out
 
 
+def _copy_with_cell(simulated: Path, tmp_path: Path, name: str, column: str, value: str) -> Path:
+    """``simulated/name`` copied into ``tmp_path`` with one cell (third data row) replaced."""
+    path = tmp_path / name
+    shutil.copy(simulated / name, path)
+    _set_cell(path, column, value)
+    return path
+
+
 def _set_cell(path: Path, column: str, value: str, row: int = 2) -> None:
     lines = path.read_text().splitlines()
     header = lines[0].split(",")
@@ -53,9 +61,7 @@ def _map_column(path: Path, column: str, fn) -> None:
 @pytest.mark.parametrize("column, value", [("vn_mps", "1e308"), ("roll_deg", "1000000"), ("pitch_deg", "-91"),
                                            ("q_dps", "1e5"), ("tas_mps", "5000"), ("heading_deg", "1e9")])
 def test_telemetry_outside_its_limits_is_one_sentence_naming_everything(simulated, tmp_path, column, value):
-    path = tmp_path / "telemetry.csv"
-    shutil.copy(simulated / "telemetry.csv", path)
-    _set_cell(path, column, value)
+    path = _copy_with_cell(simulated, tmp_path, "telemetry.csv", column, value)
     limit = COLUMN_LIMITS[column]
     with pytest.raises(ValueError) as error:
         read_telemetry(path)
@@ -73,17 +79,13 @@ def test_telemetry_outside_its_limits_is_one_sentence_naming_everything(simulate
     ("near_left_visible", "7", "column 'near_left_visible' is 7 (0 or 1 is required)"),
 ])
 def test_labels_outside_the_chart_or_the_frame_order_are_refused(simulated, tmp_path, column, value, expected):
-    path = tmp_path / "labels.csv"
-    shutil.copy(simulated / "labels.csv", path)
-    _set_cell(path, column, value)
+    path = _copy_with_cell(simulated, tmp_path, "labels.csv", column, value)
     with pytest.raises(ValueError, match=re.escape(f"{path} line 4: {expected}")):
         read_labels(path)
 
 
 def test_truth_of_1e308_is_refused(simulated, tmp_path):
-    path = tmp_path / "truth.csv"
-    shutil.copy(simulated / "truth.csv", path)
-    _set_cell(path, "dh_m", "1e308")
+    path = _copy_with_cell(simulated, tmp_path, "truth.csv", "dh_m", "1e308")
     with pytest.raises(ValueError, match=re.escape(f"{path} line 4: column 'dh_m' is 1e+308, outside the plausible "
                                                    "-1000..30000 m")):
         read_truth(path)
@@ -263,9 +265,7 @@ def test_detect_and_track_refuse_an_implausible_camera_first(simulated, tmp_path
 
 
 def test_a_visible_corner_without_its_pixel_is_refused(simulated, tmp_path):
-    path = tmp_path / "labels.csv"
-    shutil.copy(simulated / "labels.csv", path)
-    _set_cell(path, "near_right_u_px", "")
+    path = _copy_with_cell(simulated, tmp_path, "labels.csv", "near_right_u_px", "")
     with pytest.raises(ValueError, match=re.escape(f"{path} line 4: column 'near_right_u_px' is empty but "
                                                    "'near_right_visible' is 1")):
         read_labels(path)
