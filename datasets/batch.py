@@ -38,10 +38,15 @@ def _run_names(inputs) -> list[str]:
     return names
 
 
-def process_one(path: str, run_dir: str, options, force: bool, echo=None, cv_threads: int = 0) -> dict:
+def process_one(path: str, run_dir: str, options, force: bool, echo=None, cv_threads: int | dict = 0) -> dict:
     """One input of a batch: its index row, and its log when ``echo`` is None (module level, so
-    that a process pool or Dask can ship it). A ``ValueError`` is the row's reason, not raised."""
+    that a process pool or Dask can ship it). A ``ValueError`` is the row's reason, not raised.
+    ``cv_threads``: OpenCV's thread count here (0: leave it), or on Dask a table worker address ->
+    count (:func:`opencv_threads_per_worker`)."""
     from visland.datasets.process import process_input
+    if isinstance(cv_threads, dict):                      # on Dask: this worker's share of its host
+        from dask.distributed import get_worker
+        cv_threads = cv_threads.get(get_worker().address, 0)
     if cv_threads:
         import cv2
         cv2.setNumThreads(cv_threads)
@@ -140,8 +145,10 @@ def _run_parallel(jobs, options, force: bool, echo, workers: int, scheduler: str
         except (OSError, TimeoutError) as error:
             raise ValueError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({error})") from None
         with client:
-            echo(f"batch: {len(jobs)} inputs on the Dask cluster at {scheduler}")
-            futures = {client.submit(process_one, path, run_dir, options, force, pure=False): k
+            shares = opencv_threads_per_worker(client.scheduler_info()["workers"], client.run(os.cpu_count))
+            echo(f"batch: {len(jobs)} inputs on the Dask cluster at {scheduler} "
+                 f"(OpenCV threads per task: {', '.join(str(n) for n in sorted(set(shares.values())))})")
+            futures = {client.submit(process_one, path, run_dir, options, force, None, shares, pure=False): k
                        for k, (path, run_dir) in enumerate(jobs)}
             for future in as_completed(list(futures), loop=client.loop):
                 finished(futures[future], future.result())
@@ -155,6 +162,34 @@ def _run_parallel(jobs, options, force: bool, echo, workers: int, scheduler: str
         for future in concurrent.futures.as_completed(futures):
             finished(futures[future], future.result())
     return rows
+
+
+def opencv_threads_per_worker(workers: dict, cpu_counts: dict) -> dict:
+    """OpenCV's thread count for a task on each Dask worker: its host's cores shared among the
+    task slots (threads) of every worker on that host, at least 1.
+
+    Without it each task's OpenCV would start one thread per core of the host, and two workers of
+    one host would each use all the cores at once (measured: 88 s against 54 s for the same batch
+    in two worker processes that share the cores).
+
+    Parameters
+    ----------
+    workers : dict
+        ``Client.scheduler_info()["workers"]``: worker address -> its info with ``"host"`` and
+        ``"nthreads"``.
+    cpu_counts : dict
+        Worker address -> ``os.cpu_count()`` on that worker (``Client.run(os.cpu_count)``).
+
+    Returns
+    -------
+    dict
+        Worker address -> OpenCV threads for a task running there.
+    """
+    slots_on_host: dict = {}
+    for info in workers.values():
+        slots_on_host[info["host"]] = slots_on_host.get(info["host"], 0) + max(1, int(info["nthreads"]))
+    return {address: max(1, int(cpu_counts.get(address) or 1) // slots_on_host[info["host"]])
+            for address, info in workers.items()}
 
 
 def _figures(run_dir: Path, run: dict) -> dict:

@@ -359,3 +359,17 @@ def test_process_applies_the_self_calibration_on_request_and_reports_it(tmp_path
         errors[apply] = json.loads((out / "metrics.json").read_text())["observers"]["ccpi-hg-2p"]["err_100ft_m"]
     assert abs(errors[False]) > 3.0
     assert abs(errors[True]) < 0.3
+
+
+def test_dask_tasks_share_their_hosts_cores_among_the_workers_task_slots():
+    """Two single-threaded workers on a 2-core host get one OpenCV thread each; a lone 1-thread
+    worker on a 4-core host gets 4; a 2-thread worker sharing an 8-core host with a 1-thread one
+    gets 8 // 3 = 2 per task; a worker whose core count is unknown gets 1."""
+    from visland.datasets.batch import opencv_threads_per_worker
+    workers = {"tcp://a:1": {"host": "a", "nthreads": 1}, "tcp://a:2": {"host": "a", "nthreads": 1},
+               "tcp://b:1": {"host": "b", "nthreads": 1},
+               "tcp://c:1": {"host": "c", "nthreads": 2}, "tcp://c:2": {"host": "c", "nthreads": 1},
+               "tcp://d:1": {"host": "d", "nthreads": 1}}
+    cpus = {"tcp://a:1": 2, "tcp://a:2": 2, "tcp://b:1": 4, "tcp://c:1": 8, "tcp://c:2": 8, "tcp://d:1": None}
+    assert opencv_threads_per_worker(workers, cpus) == {"tcp://a:1": 1, "tcp://a:2": 1, "tcp://b:1": 4,
+                                                        "tcp://c:1": 2, "tcp://c:2": 2, "tcp://d:1": 1}
