@@ -105,12 +105,16 @@ def deviations_from_lines(lines, R_runway_from_camera, dh_m: float) -> Deviation
     if R.shape != (3, 3):
         raise ValueError(f"R_runway_from_camera must have shape (3, 3), got {R.shape}")
     _check_height(dh_m)
+    # on Python floats (the runner calls this at every frame of a line observer's run)
+    _, (r10, r11, r12), (r20, r21, r22) = R.tolist()
     offsets = []
-    for rho, theta in lines:
-        m_V = R @ np.array([math.cos(theta), math.sin(theta), -rho])
-        if abs(m_V[1]) < 1e-12:       # the line's plane contains the lateral axis: no lateral offset
+    for rho, theta in lines.tolist():
+        c, s = math.cos(theta), math.sin(theta)
+        m1 = r10 * c + r11 * s - r12 * rho                 # m_V = R_runway_from_camera m_C, rows 1 and 2
+        m2 = r20 * c + r21 * s - r22 * rho
+        if abs(m1) < 1e-12:           # the line's plane contains the lateral axis: no lateral offset
             return Deviations(math.nan, math.nan, float(dh_m), math.nan)
-        offsets.append(-dh_m * m_V[2] / m_V[1])
+        offsets.append(-dh_m * m2 / m1)
     y_left, y_right = offsets
     return Deviations(math.nan, float(-0.5 * (y_left + y_right)), float(dh_m), float(y_right - y_left))
 

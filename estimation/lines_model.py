@@ -145,7 +145,9 @@ def edge_terms_and_jacobian(theta: float, rho: float, u: tuple) -> tuple:
           ((1.0 + rho * rho) * cw, 2.0 * rho * sw))
     JPhi = ((-(a * speed + A * S_theta), A * v2),
             (rho * A * speed - B * S_theta, -(a * speed - B * v2)))
-    return (-rho * cw - w2, (1.0 + rho * rho) * sw, -A * speed, -B * speed, Jg, JPhi)
+    # g_theta written as in edge_terms, so that both give the same floats (ekf-2l takes its
+    # prediction's first Heun stage from here)
+    return (-rho * c * w0 - rho * s * w1 - w2, (1.0 + rho * rho) * sw, -A * speed, -B * speed, Jg, JPhi)
 
 
 def pair_model(y, eta: float, u: tuple) -> tuple:

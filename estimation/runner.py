@@ -207,7 +207,10 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
         reason[f] = estimate.reason if estimate.coasting else ""
         if hasattr(observer, "extra_outputs"):
             for key, value in observer.extra_outputs().items():
-                extras.setdefault(key, np.full(m, np.nan))[f] = value
+                column = extras.get(key)
+                if column is None:           # (not setdefault: its default would be built at every frame)
+                    column = extras[key] = np.full(m, np.nan)
+                column[f] = value
         if own_deviations:
             dev = observer.deviations(aim_distance_m)
             out["dx_m"][f], out["dy_m"][f], out["width_m"][f] = dev.dx_m, dev.dy_m, dev.width_m
