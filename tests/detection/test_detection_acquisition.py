@@ -60,6 +60,26 @@ def test_the_strip_wins_over_the_ground_beside_it_whatever_their_scores(grass_sc
     assert _ground_between_strips_last(apart, params) == apart
 
 
+def test_the_strip_beside_the_ground_does_not_jump_over_a_runway_that_outscores_it():
+    """The bench's 2000 m frames: a field's bright strip and the grass beside it meet the horizon at
+    another point than the runway; the grass outscored the runway, the strip did not. Demoting
+    the grass must not hand its rank to the strip: the runway stays first (it was put behind the
+    strip since the ground-between rule, and the frame was not found)."""
+    params = DetectorParams()
+    field_s0 = 45.0
+    grass = _strip(80.0, 106.0, -1, score=2.68, inside_minus_ground=1.4, contrast=10.0)
+    bright = _strip(45.0, 80.0, +1, score=1.49, inside_minus_ground=15.4, contrast=10.0)
+    grass = RunwayHypothesis(**{**grass.__dict__, "s0": field_s0})
+    bright = RunwayHypothesis(**{**bright.__dict__, "s0": field_s0})
+    runway = RunwayHypothesis(**{**RUNWAY.__dict__, "score": 2.54})
+    ordered = _ground_between_strips_last([grass, runway, bright], params)
+    assert ordered[0] is runway
+    assert ordered.index(bright) < ordered.index(grass)
+    # of one vanishing point the strip still goes ahead of the ground whatever their scores
+    same_point = RunwayHypothesis(**{**runway.__dict__, "s0": field_s0, "k_left": -3.0, "k_right": -2.0})
+    assert _ground_between_strips_last([grass, same_point, bright], params)[0] is bright
+
+
 @pytest.mark.slow
 def test_a_rendered_frame_with_a_parallel_taxiway_at_600_m_is_not_paired_with_it():
     """visland's renderer, monochrome sand, 512 px, 600 m before the threshold on thesis-3: the
