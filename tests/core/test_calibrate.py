@@ -143,6 +143,7 @@ def _field_folder(folder, k1):
     return folder
 
 
+@pytest.mark.slow
 def test_k1_from_straight_lines(tmp_path, capsys):
     folder = _field_folder(tmp_path / "fields", -0.12)
     hfov = math.degrees(2 * math.atan(320.0 / LINE_K["fx"]))
@@ -156,6 +157,7 @@ def test_k1_from_straight_lines(tmp_path, capsys):
     assert k1 == pytest.approx(-0.12, abs=0.012) and (k2, p1, p2, k3) == (0.0, 0.0, 0.0, 0.0)
 
 
+@pytest.mark.slow
 def test_straight_lines_of_a_pinhole_lens_give_k1_near_zero(tmp_path):
     from visland.lens import estimate_k1_from_lines
     folder = _field_folder(tmp_path / "fields", 0.0)

@@ -218,6 +218,7 @@ def test_an_fps_that_disagrees_with_truth_names_fps(simulated, tmp_path, capsys)
 
 
 # ---------------------------------------------------------------- issue 20 item 8: compare says why
+@pytest.mark.slow
 def test_compare_says_why_a_run_has_no_errors_at_the_heights(simulated, tmp_path, capsys):
     folder = tmp_path / "high"
     shutil.copytree(simulated, folder)
@@ -287,6 +288,7 @@ def test_an_off_centre_principal_point_and_an_absurd_fps_are_refused(simulated, 
 
 
 # ---------------------------------------------------------------- issue 19 item 3: a diverged observer is cut off
+@pytest.mark.slow
 def test_a_diverged_observer_is_cut_off_and_said_to_be_everywhere(simulated, tmp_path, capsys):
     """camera.json says the camera looks 0.5 deg less down than it does (thesis-3, ideal corners): ccpi-hg-2p's
     height is driven onto its domain bound and stays there; it is cut off, said to have diverged in the log,

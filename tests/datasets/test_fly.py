@@ -33,6 +33,7 @@ def landings():
     return {truth: fly(_short(), FlyOptions(truth_guided=truth, seed=3)) for truth in (False, True)}
 
 
+@pytest.mark.slow
 def test_vision_guided_landing_touches_down_in_the_window_near_the_truth_guided_one(landings):
     vision, truth = landings[False], landings[True]
     for run in (vision, truth):
@@ -45,18 +46,21 @@ def test_vision_guided_landing_touches_down_in_the_window_near_the_truth_guided_
     assert abs(vision["dh_err_100ft_m"]) < 1.0 and truth["dh_err_100ft_m"] == 0.0
 
 
+@pytest.mark.slow
 def test_losing_the_runway_below_150_ft_is_a_go_around_at_100_ft():
     run = fly(_short(), FlyOptions(seed=3, detection_lost_below_ft=150.0))
     assert run["go_around"] and run["touchdown_x_m"] is None
     assert run["go_around_reason"].startswith("100 ft: runway found in 0%")
 
 
+@pytest.mark.slow
 def test_the_truth_guided_baseline_lands_and_records_what_the_monitor_would_have_decided():
     run = fly(_short(), FlyOptions(seed=3, detection_lost_below_ft=150.0, truth_guided=True))
     assert not run["go_around"] and 60.0 <= run["touchdown_x_m"] <= 823.0
     assert run["monitor_would_go_around"].startswith("100 ft: runway found in 0%")
 
 
+@pytest.mark.slow
 def test_fly_command_ends_with_one_json_line_and_refuses_a_line_observer(capsys, tmp_path):
     scenario = tmp_path / "short.toml"
     scenario.write_text('name = "short"\ndx_m = -1500.0\ndy_m = 20.0\ndgs_m = 0.0\ndpsi_deg = 0.0\ngamma_deg = -3.0\n')
@@ -136,6 +140,7 @@ def test_depth_flow_is_the_corner_motion_due_to_the_translation():
     assert tracked.depth_flow_px == pytest.approx(2 * 618.0 * 0.7 * 2.0, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_a_decision_height_the_approach_starts_below_is_not_called_out():
     """The short approach starts at 1500 m tan 3 deg = 79 m, below 400 ft (122 m): two decisions."""
     run = fly(_short(), FlyOptions(truth_guided=True, seed=3))
@@ -212,6 +217,7 @@ def test_a_straight_in_glide_path_start_is_weakly_observable_at_400_ft():
     assert nominal["decisions"][0]["depth_flow_px"] > 100.0
 
 
+@pytest.mark.slow
 def test_step_inputs_heading_is_the_offline_one_frame_by_frame():
     """fly's causal StepInputs and estimate's prepare_inputs give the same runway heading on every
     frame (same d_F on the inertial horizon, same robust weights and settling), here with 5 px of

@@ -114,6 +114,7 @@ def _estimates_by_observer(path):
 ITEM1_OBSERVERS = ("ekf-2l", "cccj-2l", "ccpi-hg-2p", "ecc-hg")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("source", ["anchored", "tracking", "detection"])
 def test_an_unreadable_frame_leaves_every_source_and_observer_coasting(rendered, tmp_path, source):
     from visland.contracts import read_measurements
@@ -144,6 +145,7 @@ def test_an_unreadable_frame_leaves_every_source_and_observer_coasting(rendered,
 
 
 # ---------------------------------------------------------------- item 3: a run where no observer can start
+@pytest.mark.slow
 def test_a_run_without_any_usable_frame_completes_and_says_why(rendered, tmp_path):
     from visland.contracts import read_measurements
     from visland.datasets.process import ProcessOptions, process_input
@@ -191,6 +193,7 @@ def test_detect_refuses_a_frame_count_below_one(simulated, tmp_path, capsys, cou
 
 
 # ---------------------------------------------------------------- item 9: entries of frames/ that are not images
+@pytest.mark.slow
 def test_frame_entries_that_are_not_files_are_flagged_and_keep_the_times(rendered, tmp_path):
     import cv2
     from visland.contracts import read_measurements

@@ -39,7 +39,8 @@ def file_route(tmp_path_factory):
     return files
 
 
-@pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("workers", [1, 2])
 def test_streamed_runs_equal_the_file_route_frame_for_frame(file_route, tmp_path, workers):
     job, files, options = _job(), file_route, OPTIONS
     streamed = tmp_path / "stream"
@@ -61,6 +62,7 @@ def test_streamed_runs_equal_the_file_route_frame_for_frame(file_route, tmp_path
         assert read_estimates(streamed / kind / "estimates.csv").n_rows == len(OBSERVERS) * by_file.n_rows
 
 
+@pytest.mark.slow
 def test_frames_kept_by_the_background_writer_are_the_file_routes_bytes(file_route, tmp_path):
     """Independent truth: ``visland generate``'s PNG files and manifest for the same job."""
     import json

@@ -90,6 +90,7 @@ def test_bench_detect_threads_option_sets_opencv_threads_for_the_run_only(folder
     assert "--threads" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_detect_without_telemetry_reads_the_horizon_off_the_frames(tmp_path, capsys):
     """Cockpit footage with no telemetry.csv: `detect` reads roll and pitch off the frames and
     masks the structure named in camera.json; `process` says estimation needs inertial data."""
