@@ -214,6 +214,22 @@ def rotation_correction(ax: float, ay: float, az: float) -> np.ndarray:
     Its derivatives (used by :func:`predict_vision`) follow from ``Rz' = [e_z]x Rz`` and
     ``Rx' = Rx [e_x]x``: ``dA/daz = [e_z]x A``, ``dA/dax = A [e_x]x``,
     ``dA/day = A [Rx^T e_y]x``.
+
+    Parameters
+    ----------
+    ax, ay, az : float
+        Correction angles (rad) about the runway x, y and z axes (state entries ``ax_rad``,
+        ``ay_rad``, ``az_rad`` of :data:`STATE_NAMES`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3, 3)
+        ``A``, the rotation applied on the runway side of ``R_runway_from_camera``.
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), the attitude angles (Phi, Theta, Psi) of the state of eq. (1), here a small correction.
     """
     return np.array(_rotation_rows(ax, ay, az))
 
@@ -244,6 +260,23 @@ def line_normals_runway(xi: float, zeta: float, omega: float) -> np.ndarray:
 
     The derivatives are along e_z: ``dm/dzeta = e_z`` (edges), ``dm/domega = +-e_z/2``,
     ``dm/dxi = -e_z`` (threshold).
+
+    Parameters
+    ----------
+    xi, zeta : float
+        ``x/H`` and ``y/H``: the camera's position in the runway frame over its height H (no unit).
+    omega : float
+        ``W/H``: the runway width over the height (no unit).
+
+    Returns
+    -------
+    numpy.ndarray, shape (4, 3)
+        One normal a row, runway axes: left edge, right edge, threshold, horizon.
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), eq. (4), (4a)-(4o): the perspective mapping, written here for lines.
     """
     return np.array([[0.0, 1.0, zeta + 0.5 * omega],
                      [0.0, 1.0, zeta - 0.5 * omega],
@@ -263,6 +296,23 @@ def line_from_normal(m) -> tuple:
 
     ``theta = atan2(m1, m0)``, ``rho = -m2 / hypot(m0, m1)``; no chart wrap: the sign of ``m`` picks
     the representative, so a prediction follows its line continuously.
+
+    Parameters
+    ----------
+    m : array_like, shape (3,)
+        Normal of the image line in normalised image coordinates (camera frame C, SPEC chart
+        ``x cos(theta) + y sin(theta) = rho``); ``(m0, m1)`` must not both be zero.
+
+    Returns
+    -------
+    (theta, rho) : tuple of float
+        The line's angle (rad, not wrapped) and distance (normalised units, thesis f = 1).
+    J : numpy.ndarray, shape (2, 3)
+        ``d(theta, rho) / dm``.
+
+    References
+    ----------
+    Thesis (seed 002) eq. 3.34, the (rho, theta) chart of a line.
     """
     m0, m1, m2 = float(m[0]), float(m[1]), float(m[2])
     h2 = m0 * m0 + m1 * m1
@@ -286,6 +336,30 @@ def predict_vision(state, R_runway_from_camera, with_threshold: bool) -> tuple:
     (``R_in = R_runway_from_camera``). With ``m_A = A^T m``: ``dm_C/dax = -R_in^T (e_x x m_A)``,
     ``dm_C/day = -R_in^T (u x m_A)`` with ``u = (0, cos ax, -sin ax)``, and
     ``dm_C/daz = -R_in^T A^T (e_z x m)``; ``dm_C/dq = (R_in^T A^T e_z) dm_z/dq`` for the ratios q.
+
+    Parameters
+    ----------
+    state : array_like, shape (12,)
+        The filter's mean in :data:`STATE_NAMES` order (SI units: 1/m, m/s, rad).
+    R_runway_from_camera : array_like, shape (3, 3)
+        Camera attitude from the inertial unit and the d_F runway heading: turns camera-frame (C)
+        vectors into runway axes (R).
+    with_threshold : bool
+        Whether the threshold line is measured this frame (it adds a third line).
+
+    Returns
+    -------
+    z_hat : numpy.ndarray, shape (2k,)
+        ``(theta, rho)`` of each of the k predicted lines (rad, normalised units), flattened.
+    H : numpy.ndarray, shape (2k, 12)
+        ``d z_hat / d state``.
+    normals_camera : list of tuple, length k
+        The lines' normals in camera axes (3 floats each).
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), eq. (4), (4a)-(4o) and sec. 3 (windows on the runway borders and the horizon).
     """
     rows = (0, 1, 2, 3) if with_threshold else (0, 1, 3)
     H = np.zeros((2 * len(rows), N_STATES))
@@ -377,6 +451,23 @@ def predict_ins_velocity(state) -> tuple:
 
     The input turns the NED velocity into runway axes with the estimated runway heading; ``az`` is
     that heading's error, so the true runway-axes velocity is ``Rz(az)`` times the input's.
+
+    Parameters
+    ----------
+    state : array_like, shape (12,)
+        The filter's mean in :data:`STATE_NAMES` order.
+
+    Returns
+    -------
+    v_hat : numpy.ndarray, shape (3,)
+        Predicted inertial ground velocity (m/s) in the input's runway axes.
+    H : numpy.ndarray, shape (3, 12)
+        ``d v_hat / d state``.
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), sec. 4 (inertial sensors); departure 3 of this module: the inertial velocity gives the scale.
     """
     H = np.zeros((3, N_STATES))
     return np.array(_ins_velocity_rows([float(v) for v in state], H, 0)), H
@@ -398,6 +489,25 @@ def predict_air_data(state, body_y_runway_in) -> tuple:
     ``a = v - w`` (``w = (wx, wy, 0)``) is the air velocity; ``tas = |a|``; zero sideslip is
     ``u . a = 0`` with ``u = Rz(az) e_yB`` the body y axis in the true runway axes
     (``body_y_runway_in``: the same axis in the input's runway axes, from the inertial attitude).
+
+    Parameters
+    ----------
+    state : array_like, shape (12,)
+        The filter's mean in :data:`STATE_NAMES` order.
+    body_y_runway_in : array_like, shape (3,)
+        Unit body y axis (right wing) in the input's runway axes.
+
+    Returns
+    -------
+    z_hat : numpy.ndarray, shape (2,)
+        Predicted true airspeed (m/s) and body-lateral air velocity (m/s, zero in coordinated flight).
+    H : numpy.ndarray, shape (2, 12)
+        ``d z_hat / d state``.
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), sec. 4 ("aerodynamic speed" from the air velocity meter).
     """
     H = np.zeros((2, N_STATES))
     z = _air_data_rows([float(v) for v in state], tuple(float(v) for v in body_y_runway_in), H, 0)
@@ -426,6 +536,25 @@ def state_derivative(state, omega_runway_rps, with_wind: bool = True) -> list:
 
         (x/H)' = eta (vx + (x/H) vz)      (y/H)' = eta (vy + (y/H) vz)      eta' = vz eta^2
         (W/H)' = (W/H) eta vz             v' = Omega x (v - w)              a', w' = 0
+
+    Parameters
+    ----------
+    state : sequence of float, length 12
+        The state in :data:`STATE_NAMES` order (SI units: 1/m, m/s, rad).
+    omega_runway_rps : sequence of float, length 3
+        Body angular rates (rad/s) turned into runway axes.
+    with_wind : bool, optional
+        Whether the wind states enter the air velocity ``v - w`` (False: ``w`` taken as zero).
+
+    Returns
+    -------
+    list of float, length 12
+        ``d state / dt`` (per second).
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), eq. (1)-(3), the dynamical model, reduced to point-mass kinematics (departure 2).
     """
     xi, zeta, eta, vx, vy, vz = state[0], state[1], state[2], state[3], state[4], state[5]
     a0, a1 = (vx - state[_WX], vy - state[_WY]) if with_wind else (vx, vy)
@@ -436,7 +565,27 @@ def state_derivative(state, omega_runway_rps, with_wind: bool = True) -> list:
 
 
 def state_jacobian(state, omega_runway_rps, with_wind: bool = True) -> np.ndarray:
-    """``F = d state_derivative / d state`` (12, 12)."""
+    """``F = d state_derivative / d state`` (12, 12).
+
+    Parameters
+    ----------
+    state : sequence of float, length 12
+        The state in :data:`STATE_NAMES` order.
+    omega_runway_rps : sequence of float, length 3
+        Body angular rates (rad/s) in runway axes.
+    with_wind : bool, optional
+        As in :func:`state_derivative`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (12, 12)
+        The Jacobian of :func:`state_derivative` (per second).
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), eq. (1)-(3), linearised for the EKF (sec. 4).
+    """
     xi, zeta, eta, vx, vy, vz = state[0], state[1], state[2], state[3], state[4], state[5]
     omega = state[_OMEGA]
     o0, o1, o2 = omega_runway_rps[0], omega_runway_rps[1], omega_runway_rps[2]
@@ -466,6 +615,26 @@ def segment_line_covariance(a_xy, b_xy, m_reference, sigma: float) -> tuple:
     (:func:`line_from_normal`) and ``G = J [dm/de_a, dm/de_b]`` the covariance is
     ``sigma^2 G G^T``. ``m_reference`` orients ``m`` (the theta-rho covariance changes sign with the
     representative).
+
+    Parameters
+    ----------
+    a_xy, b_xy : array_like, shape (2,)
+        The two image points in normalised image coordinates (``x = (u - cx)/fx``, ``y = (v - cy)/fy``).
+    m_reference : array_like, shape (3,)
+        A normal of the same line (e.g. the predicted one) whose sign picks the representative.
+    sigma : float
+        Standard deviation of each point across the line (normalised units).
+
+    Returns
+    -------
+    (var_theta, cov_theta_rho, var_rho) : tuple of float
+        In rad^2, rad x normalised units, normalised units^2; ``(1e6, 0, 1e6)`` when the two points
+        coincide.
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), sec. 3 (measurement noise of the border windows), replaced here by lines (departure 5).
     """
     a0, a1 = float(a_xy[0]), float(a_xy[1])
     b0, b1 = float(b_xy[0]), float(b_xy[1])

@@ -58,7 +58,18 @@ _PIXEL_NOISE_PX = 1.0
 
 
 def without_airspeed(prepared):
-    """The same prepared inputs with the airspeed removed (as telemetry without ``tas_mps``)."""
+    """The same prepared inputs with the airspeed removed (as telemetry without ``tas_mps``).
+
+    Parameters
+    ----------
+    prepared : visland.estimation.inputs.PreparedInputs
+        Inputs prepared as ``visland estimate`` does; not modified.
+
+    Returns
+    -------
+    visland.estimation.inputs.PreparedInputs
+        A copy whose every step has ``tas_mps = nan``.
+    """
     return replace(prepared, steps=[replace(step, tas_mps=math.nan) for step in prepared.steps])
 
 
@@ -92,7 +103,29 @@ def _fmt(value, width: int = 8) -> str:
 
 
 def dickmanns_study(out: Path | None, seed: int, echo) -> dict:
-    """Run both parts (module docstring); print the tables; return the figures (the JSON line)."""
+    """Run both parts (module docstring); print the tables; return the figures (the JSON line).
+
+    Parameters
+    ----------
+    out : pathlib.Path or None
+        Existing folder for ``dickmanns-wind.png`` and ``thesis-1-dickmanns.png``; None: no plots.
+    seed : int
+        Seed of the pixel noise; scenario k of the thesis's eight uses ``seed + k``.
+    echo : callable
+        Takes each printed line (a str).
+
+    Returns
+    -------
+    dict
+        ``observers`` (per row of :data:`DICKMANNS_VARIANTS`: errors in metres at 400/200/100 ft,
+        means and standard deviations over the eight scenarios, 5 % convergence times in seconds,
+        the thesis's Table 5.6 figures), ``wind`` (:func:`wind_case_figures`), ``plots``.
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), sec. 7 (accuracy reached); thesis (seed 002) Table 5.2 (scenarios), Table 5.6 (1 px).
+    """
     from visland.estimation.study import THESIS_SCENARIOS, Condition, simulate_case
     condition = Condition("1 px", pixel_noise_px=_PIXEL_NOISE_PX)
     echo("study dickmanns: seed 004's 4D approach (dickmanns-4d) beside ekf-2l and ccpi-hg-2p, 1 px pixel noise")
@@ -164,7 +197,28 @@ def _print_thesis_table(table: dict, echo) -> None:
 
 # --------------------------------------------------------------------------- the seed's wind case
 def wind_case_figures(seed: int, echo, out: Path | None = None) -> dict:
-    """Part 2 (module docstring): ``dickmanns-wind`` with and without airspeed against seed 004."""
+    """Part 2 (module docstring): ``dickmanns-wind`` with and without airspeed against seed 004.
+
+    Parameters
+    ----------
+    seed : int
+        Seed of the pixel noise (1 px).
+    echo : callable
+        Takes each printed line (a str).
+    out : pathlib.Path or None, optional
+        Existing folder for ``dickmanns-wind.png``; None: no plot.
+
+    Returns
+    -------
+    dict
+        Per observer the largest errors (m, m/s) over the windows of :data:`SEED_004_TARGETS`,
+        ``dickmanns_4d_meets`` (each target met or not) and ``plots`` (paths written).
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), sec. 7.1-7.2 (HIL and flight-test accuracy).
+    """
     from visland.estimation.study import Condition, simulate_case
     case = simulate_case("dickmanns-wind", Condition("1 px", pixel_noise_px=_PIXEL_NOISE_PX), seed=seed)
     result = case.result
@@ -320,6 +374,24 @@ def score_wind_run(run_dir, echo=print) -> dict:
     measured) and, for scoring only, ``runway.json``'s width and aiming distance and ``manifest.json``'s
     gust time constant. The gust's onset is the frame where the true crosswind jumps up most (at least
     0.5 m/s between two frames). Prints one row per observer; returns the figures.
+
+    Parameters
+    ----------
+    run_dir : str or pathlib.Path
+        Output folder of ``visland process`` on a dataset with truth (the files above).
+    echo : callable, optional
+        Takes each printed line (a str).
+
+    Returns
+    -------
+    dict
+        Per observer name, the largest ``|truth - estimate|`` (m; crosswind m/s) in each window of
+        :data:`SEED_004_TARGETS` (NaN where the window holds no estimate).
+
+    References
+    ----------
+    E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+    (seed 004), sec. 7.
     """
     import json
 

@@ -53,7 +53,37 @@ ROBUSTNESS_SCENARIOS = ("thesis-1", "thesis-4", "thesis-7")
 
 @dataclass(frozen=True)
 class RobustnessRow:
-    """One row of the sweep: its axis, its label and the imperfection."""
+    """One row of the sweep: its axis, its label and the imperfection.
+
+    Attributes
+    ----------
+    axis : str
+        The imperfection swept (module docstring's table: ``noise``, ``frame rate``, ...).
+    label : str
+        The row's name in the table and ``study.json``.
+    level : float
+        The imperfection's size in the axis's unit (px, Hz, deg, %, s or a fraction), for the plot.
+    pixel_noise_px : float, optional
+        Gaussian corner noise (px, standard deviation).
+    fps : float, optional
+        Camera frame rate (Hz).
+    mount_error_deg : tuple of float, optional
+        (roll, pitch, yaw) error of the camera mounting against camera.json (deg, SPEC ``mount_rpy_deg``).
+    slope_pct : float, optional
+        Longitudinal slope of the runway (%, positive up along the landing direction).
+    delay_s : float, optional
+        Time from a frame's exposure to its stamp (s).
+    delay_announced : bool, optional
+        Whether the observers are told the delay (``--time-offset``).
+    velocity_bias_fraction : float, optional
+        Relative error of the inertial velocity (0.05: 5 % high).
+    self_calibration : str, optional
+        The mounting's self-calibration: ``off`` or ``apply`` (as ``--self-calibration``).
+
+    References
+    ----------
+    Thesis (seed 002) sec. 5.2: noise (5.2.2), frame rate and delay (5.2.3), velocity bias (Table 5.12).
+    """
 
     axis: str
     label: str
@@ -94,6 +124,16 @@ def noise_params(pixel_noise_px: float) -> dict:
     Up to 1 px the defaults (the thesis's tuning); from 5 px the studies' 5 px settings
     (``SLOW_5PX_PARAMS``); between, the observers that take the noise as a parameter are told it
     (kf-2p's measurement noise, cccs-2p's bias correction and eta-rate saturation).
+
+    Parameters
+    ----------
+    pixel_noise_px : float
+        Standard deviation of the corner noise (px, at the SPEC camera's fx = 2472 px).
+
+    Returns
+    -------
+    dict
+        Observer name -> parameter overrides (empty up to 1 px).
     """
     from visland.estimation.study import SLOW_5PX_PARAMS
     if pixel_noise_px <= 1.0:
@@ -114,7 +154,28 @@ def _truth_at(result, t_s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 def delayed_case(case, delay_s: float, announced: bool):
     """``case`` (a :class:`visland.estimation.study.Case`) re-prepared with its frames stamped
-    ``delay_s`` after their exposure, the delay announced or not (module docstring)."""
+    ``delay_s`` after their exposure, the delay announced or not (module docstring).
+
+    Parameters
+    ----------
+    case : visland.estimation.study.Case
+        A simulated case with ideal features.
+    delay_s : float
+        Delay from exposure to stamp, in [0, 1] s.
+    announced : bool
+        Whether the inertial data are moved onto the frames' clock (``--time-offset``).
+
+    Returns
+    -------
+    visland.estimation.study.Case
+        Frames stamped after the telemetry's end dropped; the truth taken at the time each estimate
+        is for (the exposure when announced, the stamp when not).
+
+    Raises
+    ------
+    ValueError
+        ``delay_s`` outside [0, 1] s.
+    """
     from visland.estimation.inputs import FeatureSeries, InertialSeries, prepare_inputs
     from visland.estimation.study import Case
     if not (math.isfinite(delay_s) and 0.0 <= delay_s <= 1.0):
@@ -171,7 +232,33 @@ def _worst(values) -> float:
 
 def robustness_study(out: Path | None, seed: int, echo, scenarios=ROBUSTNESS_SCENARIOS,
                      observers=ROBUSTNESS_OBSERVERS, rows=ROBUSTNESS_ROWS) -> dict:
-    """Run the sweep; print the table; write ``robustness.png`` into ``out``; return the figures."""
+    """Run the sweep; print the table; write ``robustness.png`` into ``out``; return the figures.
+
+    Parameters
+    ----------
+    out : pathlib.Path or None
+        Existing folder for ``robustness.png``; None: no plot.
+    seed : int
+        Seed of the noise; scenario k uses ``seed + k``.
+    echo : callable
+        Takes each printed line (a str).
+    scenarios : sequence of str, optional
+        Scenario names (:mod:`visland.scenarios`).
+    observers : sequence of str, optional
+        Observer names (SPEC).
+    rows : sequence of RobustnessRow, optional
+        The imperfections, one run each.
+
+    Returns
+    -------
+    dict
+        ``rows``: per row label, per observer the largest ``|dH - dH_hat|`` (m) at 400/200/100 ft and
+        ``|dY - dY_hat|`` at 100 ft over the scenarios, and the figures per scenario; ``plots``.
+
+    References
+    ----------
+    Thesis (seed 002) sec. 5.2 and Tables 5.6-5.12 (the imperfections and their metrics).
+    """
     echo("study robustness: one imperfection per row, 1 px corner noise and 25 Hz unless the row says otherwise; "
          "mount errors and slope with the self-calibration applied")
     echo(f"scenarios {', '.join(scenarios)}; each cell: the largest |dH - dH_hat| at 100 ft over them (m); "
