@@ -37,7 +37,47 @@ DEFAULT_OBSERVERS = ("oj-2p", "ii-2p", "cccs-2p", "ccpi-hg-2p", "ccpi-hosm-2p", 
 
 @dataclass(frozen=True)
 class ProcessOptions:
-    """What ``visland process`` does (see its --help)."""
+    """What ``visland process`` does (see its --help); validated on construction (``ValueError``
+    naming the command-line option).
+
+    Attributes
+    ----------
+    source : str
+        How features are measured: ``detection``, ``tracking``, ``anchored`` (tracking re-anchored
+        on detection) or ``ideal`` (the folder's labels.csv); tracking kinds may name a template
+        update policy (``tracking:every_frame``).
+    observers : tuple of str
+        Observer names (SPEC), at least one.
+    camera, telemetry, frames_csv : str or None
+        A camera.json, telemetry.csv or frames.csv (SPEC contracts) to use instead of the input's own.
+    fps : float or None
+        Frame rate (Hz) when there is no frames.csv; None: 25 Hz or the video's own.
+    initial_height_m : float or None
+        Initial guess of the height above the runway (m); required without truth.csv.
+    initial_error : float
+        With truth.csv and no ``initial_height_m``: start this fraction above the true height
+        (0.2, the seeds' 20 %).
+    init : str or None
+        Tracking designation of the threshold corners: ``labels`` or ``"u,v;u,v"`` in pixels
+        (SPEC convention: u right, v down, (0, 0) the centre of the top-left pixel).
+    report : bool
+        Whether to write the HTML report.
+    quiet : bool
+        No progress bar.
+    params_file : str or None
+        Observer parameters (TOML or JSON).
+    time_offset_s : float
+        Seconds added to the telemetry's times to put them on the frames' clock, within +-60 s
+        (:mod:`visland.clocks`).
+    estimate_offset : bool
+        Estimate that offset from the horizon's roll in the frames.
+    self_calibration : bool
+        Apply the camera mounting's self-calibration (``estimate --self-calibration``); False: it is
+        computed and reported only.
+    windows : str
+        Who places detection's search windows: ``detector`` or ``dickmanns-4d``
+        (:mod:`visland.datasets.filter_windows`).
+    """
 
     source: str = "detection"
     observers: tuple = DEFAULT_OBSERVERS
@@ -127,7 +167,27 @@ def _deviation_errors(truth, estimates_path: Path) -> dict:
 
 def process_input(input_path, out_dir, options: ProcessOptions | None = None, force: bool = False,
                   echo=print) -> dict:
-    """Run the whole offline pipeline on ``input_path`` into ``out_dir``; return run.json's content."""
+    """Run the whole offline pipeline on ``input_path`` into ``out_dir``; return run.json's content.
+
+    Parameters
+    ----------
+    input_path : str or pathlib.Path or visland.datasets.sources.FrameSource
+        A frame folder (SPEC contract), a video, or a frame source already open.
+    out_dir : str or pathlib.Path
+        The run folder: measurements.csv, estimates.csv, run.json, with truth metrics.json and
+        the report.
+    options : ProcessOptions, optional
+        What to do; None: the defaults.
+    force : bool, optional
+        Replace an existing output folder (else ``ValueError``).
+    echo : callable, optional
+        Takes each printed line (a str).
+
+    Returns
+    -------
+    dict
+        The content of run.json (frames, found and flagged frames, observers, files written).
+    """
     options = options or ProcessOptions()
     return process_many(input_path, {options.source: out_dir}, options, force=force, echo=echo)[options.source]
 
@@ -138,7 +198,32 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
     every frame once; one run folder per source. Returns ``{source: run.json content}``.
 
     ``input_path`` is a frame folder, a video, or a :class:`visland.datasets.sources.FrameSource`
-    already open (the frames streamed from the renderer, :mod:`visland.datasets.stream`)."""
+    already open (the frames streamed from the renderer, :mod:`visland.datasets.stream`).
+
+    Parameters
+    ----------
+    input_path : str or pathlib.Path or visland.datasets.sources.FrameSource
+        A frame folder (SPEC contract), a video, or a frame source already open.
+    out_dirs : dict
+        Measurement source kind (as :attr:`ProcessOptions.source`) -> its run folder.
+    options : ProcessOptions, optional
+        What to do (its ``source`` is replaced by each key of ``out_dirs``); None: the defaults.
+    force : bool, optional
+        Replace existing output folders (else ``ValueError``).
+    echo : callable, optional
+        Takes each printed line (a str).
+
+    Returns
+    -------
+    dict
+        Source kind -> the content of that run's run.json.
+
+    Raises
+    ------
+    ValueError
+        An output exists without ``force``, the input breaks a SPEC contract (one sentence naming
+        the file and row), or there is neither truth.csv nor an initial height.
+    """
     from visland.datasets.measure import measure_many
     from visland.datasets.sources import FrameSource, open_source
     from visland.estimation.command import EstimateOptions

@@ -43,7 +43,15 @@ __all__ = ["RenderedSource", "FrameWriter", "write_dataset_files", "stream_proce
 
 def write_dataset_files(result, folder) -> None:
     """Every file ``visland generate`` writes into ``folder`` but ``frames/`` (and the simulation's
-    manifest instead of the dataset's, so the folder is not taken for a complete dataset)."""
+    manifest instead of the dataset's, so the folder is not taken for a complete dataset).
+
+    Parameters
+    ----------
+    result : visland.simulate.SimulationResult
+        The simulated approach.
+    folder : str or pathlib.Path
+        The dataset folder, created if missing.
+    """
     from visland.simulate import write_simulation_files
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -60,6 +68,17 @@ class FrameWriter:
     at 2048 px). ``close()`` waits for the last frame and raises the first error a writer met.
     Each frame is encoded as :func:`visland.datasets.generate.encode_frame_png` and written
     atomically (a frame file that exists is complete); ``digests`` maps index -> SHA-256.
+
+    Parameters
+    ----------
+    frames_dir : str or pathlib.Path
+        Folder of the PNG files, created if missing.
+    png_compression : int, optional
+        OpenCV's PNG compression level, 0-9 (as ``visland generate --png-compression``).
+    threads : int, optional
+        Writer threads (at least 1).
+    queue_size : int, optional
+        Frames that may wait to be written before ``put`` blocks (at least 1).
 
     Attributes
     ----------
@@ -263,7 +282,32 @@ def stream_process(job, dataset_dir, run_dirs: dict, options, workers: int = 1, 
     runs as ``visland process`` does with ``options`` (:class:`visland.datasets.process.ProcessOptions`).
     With ``keep_frames`` a :class:`FrameWriter` also writes the frames, and the dataset's manifest
     is written last (the folder is then a complete ``visland generate`` dataset).
-    Returns ``{source: run.json content}``."""
+    Returns ``{source: run.json content}``.
+
+    Parameters
+    ----------
+    job : visland.datasets.generate.GenerateJob
+        Scenario, simulation options (camera, frame rate, seed) and scene.
+    dataset_dir : str or pathlib.Path
+        The dataset folder (metadata files; the frames too with ``keep_frames``).
+    run_dirs : dict
+        Measurement source kind -> its run folder (replaced if present).
+    options : visland.datasets.process.ProcessOptions
+        What the runs do.
+    workers : int, optional
+        Render processes (1: a background thread of this process).
+    echo : callable, optional
+        Takes each printed line (a str).
+    keep_frames : bool, optional
+        Also write the frames as PNG files, byte-identical to ``visland generate``'s.
+    writer_threads : int, optional
+        Threads of the :class:`FrameWriter` with ``keep_frames``.
+
+    Returns
+    -------
+    dict
+        Source kind -> the content of that run's run.json.
+    """
     import json
     from visland.contracts import atomic_write_text
     from visland.datasets.generate import dataset_manifest

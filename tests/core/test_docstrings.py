@@ -27,7 +27,8 @@ DOCUMENTED_PACKAGES = ("visland", "visland.render", "visland.tracking", "visland
 #: Modules, in the packages not yet documented throughout, whose whole public API is documented.
 DOCUMENTED_MODULES = ("visland.datasets.batch", "visland.datasets.compare", "visland.datasets.generate",
                       "visland.datasets.lard", "visland.datasets.measure", "visland.datasets.pixel_errors",
-                      "visland.datasets.report", "visland.datasets.sources")
+                      "visland.datasets.process", "visland.datasets.report", "visland.datasets.sources",
+                      "visland.datasets.stream")
 
 
 def _callables(module_names):
