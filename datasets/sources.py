@@ -137,13 +137,7 @@ class VideoSource(FrameSource):
             self.timing = f"frame times from --fps {fps:g}"
         else:
             self.times_s, self.timing = _container_times(stamps_s, video_fps, self.path)
-        camera_path = Path(camera) if isinstance(camera, (str, Path)) else here / "camera.json"
-        if isinstance(camera, CameraModel):
-            self.camera = camera
-        elif camera_path.exists():
-            self.camera = CameraModel.load(camera_path)
-        else:
-            raise ValueError(f"{camera_path}: camera file not found (give --camera FILE)")
+        self.camera = CameraModel.for_input(camera, here)
         telemetry_path = Path(telemetry) if telemetry else here / "telemetry.csv"
         if not telemetry_path.exists():
             raise ValueError(f"{telemetry_path}: telemetry file not found; estimation needs inertial data (give "
@@ -207,8 +201,7 @@ class LabelsSource(FrameSource):
         labels_path = root / "labels.csv"
         self.labels = read_labels(labels_path)
         self.times_s = self.labels["t_s"]
-        camera_path = Path(camera) if isinstance(camera, (str, Path)) else root / "camera.json"
-        self.camera = camera if isinstance(camera, CameraModel) else CameraModel.load(camera_path)
+        self.camera = CameraModel.for_input(camera, root)
         telemetry_path = Path(telemetry) if telemetry else root / "telemetry.csv"
         self.telemetry = read_telemetry(telemetry_path)
         self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(telemetry_path))

@@ -189,7 +189,7 @@ class RenderedSource(FrameSource):
         if len(self.times_s) != len(result.frames):
             raise ValueError(f"{self.root / 'frames.csv'}: {len(self.times_s)} frames but the job renders "
                              f"{len(result.frames)}")
-        self.camera = CameraModel.load(self.root / "camera.json")
+        self.camera = CameraModel.for_input(None, self.root)
         self.telemetry = read_telemetry(self.root / "telemetry.csv")
         self.inertial = interpolate_telemetry(self.telemetry, self.times_s, source=str(self.root / "telemetry.csv"))
         self.truth = read_truth(self.root / "truth.csv")

@@ -396,11 +396,12 @@ def score_wind_run(run_dir, echo=print) -> dict:
     import json
 
     from visland.contracts import read_estimates, read_measurements, read_truth
+    from visland.runway import Runway
     run_dir = Path(run_dir)
     truth = read_truth(run_dir / "truth.csv")
     estimates = read_estimates(run_dir / "estimates.csv")
     measured = read_measurements(run_dir / "measurements.csv")
-    runway = json.loads((run_dir / "runway.json").read_text())
+    runway = Runway.load(run_dir / "runway.json")
     tau = 6.0
     manifest = run_dir / "manifest.json"
     if manifest.exists():
@@ -416,7 +417,7 @@ def score_wind_run(run_dir, echo=print) -> dict:
             gust_t0 = float(t[int(np.argmax(jump)) + 1])
     seen = np.isfinite(np.asarray(measured["near_left_u_px"], dtype=float)) & \
         np.isfinite(np.asarray(measured["near_right_u_px"], dtype=float)) & (np.asarray(measured["found"]) > 0.5)
-    aim = float(runway.get("aim_distance_m", 320.0))
+    aim = runway.aim_distance_m
     from_2km = dx_true > -2000.0 - aim
     by_1km = dx_true > -1000.0 - aim
     after_gust = t > gust_t0 + tau
@@ -441,7 +442,7 @@ def score_wind_run(run_dir, echo=print) -> dict:
                "dx_threshold_visible_from_1km_m": worst(dx_true - est["dx_m"], seen & by_1km),
                "dh_from_2km_m": worst(dh_true - est["dh_m"], from_2km),
                "dy_from_2km_m": worst(dy_true - est["dy_m"], from_2km),
-               "width_by_1km_m": worst(float(runway["width_m"]) - est["width_m"], by_1km),
+               "width_by_1km_m": worst(runway.width_m - est["width_m"], by_1km),
                "crosswind_after_gust_mps": (worst(wy_true - wind_y, after_gust)
                                             if wind_y is not None and wy_true is not None else math.nan),
                "dh_err_100ft_m": error_at_height_of(dh_true, dh_true, est["dh_m"], 100 * FT_TO_M),

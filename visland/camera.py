@@ -245,9 +245,54 @@ class CameraModel:
 
     @classmethod
     def load(cls, path) -> "CameraModel":
+        """Read a ``camera.json`` file (SPEC contract).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file; a mask image it names is looked for beside it.
+
+        Returns
+        -------
+        CameraModel
+
+        Raises
+        ------
+        ValueError
+            One sentence naming the file and the field (:meth:`from_json_dict`), or the file
+            missing, unreadable or not a JSON object.
+        """
         from visland.userfiles import read_json_object    # a byte-order mark, a folder, a list: one sentence
         path = Path(path)
         return cls.from_json_dict(read_json_object(path, "camera file"), source=str(path), base_dir=path.parent)
+
+    @classmethod
+    def for_input(cls, camera, folder) -> "CameraModel":
+        """The camera of a frame folder or video: the one every reader of an input uses.
+
+        Parameters
+        ----------
+        camera : CameraModel or str or pathlib.Path or None
+            A camera already built (returned as it is), the camera.json a command was given
+            (``--camera``), or None for the input's own.
+        folder : str or pathlib.Path
+            Where the input's own ``camera.json`` lies (the frame folder, or a video's folder).
+
+        Returns
+        -------
+        CameraModel
+
+        Raises
+        ------
+        ValueError
+            ``"<path>: camera file not found (give --camera FILE)"``, or :meth:`load`'s sentence.
+        """
+        if isinstance(camera, cls):
+            return camera
+        path = Path(camera) if camera else Path(folder) / "camera.json"
+        if not path.exists():
+            raise ValueError(f"{path}: camera file not found (give --camera FILE)")
+        return cls.load(path)
 
     # ----------------------------------------------------------------- points
     def normalized_to_pixels(self, xy) -> np.ndarray:

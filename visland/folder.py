@@ -176,13 +176,7 @@ class FrameFolder:
             if not (math.isfinite(fps) and fps > 0):
                 raise ValueError(f"fps must be a positive number, got {fps!r}")
             self.times_s = np.arange(n) / fps
-        if isinstance(camera, CameraModel):
-            self.camera = camera
-        else:
-            camera_path = Path(camera) if camera else self.root / "camera.json"
-            if not camera_path.exists():
-                raise ValueError(f"{camera_path}: camera file not found (give --camera FILE)")
-            self.camera = CameraModel.load(camera_path)
+        self.camera = CameraModel.for_input(camera, self.root)
         telemetry_path = Path(telemetry) if telemetry else self.root / "telemetry.csv"
         if telemetry_path.exists():
             self.telemetry = read_telemetry(telemetry_path)

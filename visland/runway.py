@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from visland.userfiles import read_json_object
 
-__all__ = ["Runway", "RUNWAY_SIZES", "GLIDE_SLOPE_RAD", "CORNER_NAMES", "MAX_SLOPE_PCT"]
+__all__ = ["Runway", "RUNWAY_SIZES", "GLIDE_SLOPE_RAD", "CORNER_NAMES", "MAX_SLOPE_PCT", "FIELD_UNITS", "JSON_REQUIRED"]
 
 GLIDE_SLOPE_RAD = math.radians(3.0)
 
@@ -44,6 +44,13 @@ RUNWAY_SIZES = {
     "long": (4000.0, 60.0),
     "wide": (3200.0, 60.0),
 }
+
+
+#: The fields of ``runway.json`` (and of a scenario's ``[runway]`` table) with their units.
+FIELD_UNITS = {"length_m": "metres", "width_m": "metres", "aim_distance_m": "metres", "heading_deg": "degrees",
+               "slope_pct": "percent"}
+#: The fields SPEC requires in ``runway.json``.
+JSON_REQUIRED = ("length_m", "width_m", "aim_distance_m")
 
 
 @dataclass(frozen=True)
@@ -155,15 +162,75 @@ class Runway:
                 "slope_pct": self.slope_pct}
 
     @classmethod
-    def load(cls, path) -> "Runway":
-        path = Path(path)
-        data = read_json_object(path, "runway file")
-        for key in ("length_m", "width_m", "aim_distance_m"):
+    def from_json_dict(cls, data: dict, source: str = "runway.json", required=JSON_REQUIRED,
+                       field_prefix: str = "") -> "Runway":
+        """Build from a ``runway.json`` dictionary (or a scenario's ``[runway]`` table); one sentence
+        naming the first missing or bad field.
+
+        Parameters
+        ----------
+        data : dict
+            Field name -> value; fields not in :data:`FIELD_UNITS` are ignored (SPEC: more may follow).
+        source : str, optional
+            What the sentence starts with (the file's path); empty: the field alone.
+        required : tuple of str, optional
+            Fields that must be present (the SPEC's three for runway.json; none in a scenario,
+            whose runway has defaults).
+        field_prefix : str, optional
+            Put before a field's name in the sentence (``"runway."`` in a scenario file).
+
+        Returns
+        -------
+        Runway
+
+        Raises
+        ------
+        ValueError
+            ``"<source>: field 'width_m' must be a finite number of metres, got 'wide'"``, a missing
+            field, or a value out of its range.
+        """
+        start = f"{source}: " if source else ""
+        if not isinstance(data, dict):
+            raise ValueError(f"{start}the runway must be a JSON object {{...}}, found a {type(data).__name__}")
+        for key in required:
             if key not in data:
-                raise ValueError(f"{path}: missing field '{key}'")
+                raise ValueError(f"{start}missing field '{field_prefix}{key}' (needed: {', '.join(required)})")
+        values = {}
+        for key, unit in FIELD_UNITS.items():
+            if key not in data:
+                continue
+            value = data[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ValueError(f"{start}field '{field_prefix}{key}' must be a finite number of {unit}, got {value!r}")
+            values[key] = float(value)
         try:
-            return cls(float(data["length_m"]), float(data["width_m"]), float(data["aim_distance_m"]),
-                       float(data.get("heading_deg", 40.0)), float(data.get("slope_pct", 0.0)))
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"{path}: {error}") from None
+            return cls(**values)
+        except ValueError as error:        # a range: "runway width_m must lie in [10, 100], got 5"
+            message = str(error)
+            for key in FIELD_UNITS:
+                message = message.replace(f"runway {key} ", f"field '{field_prefix}{key}' ", 1)
+            raise ValueError(f"{start}{message}") from None
+
+    @classmethod
+    def load(cls, path) -> "Runway":
+        """Read a ``runway.json`` file (SPEC: ``length_m``, ``width_m``, ``aim_distance_m``; optional
+        ``heading_deg``, ``slope_pct``).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file.
+
+        Returns
+        -------
+        Runway
+
+        Raises
+        ------
+        ValueError
+            One sentence naming the file and the field (:meth:`from_json_dict`), or the file
+            missing, unreadable or not a JSON object.
+        """
+        path = Path(path)
+        return cls.from_json_dict(read_json_object(path, "runway file"), source=str(path))
 

@@ -23,7 +23,7 @@ import math
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
-from visland.runway import Runway
+from visland.runway import FIELD_UNITS, Runway
 from visland.userfiles import read_toml_object
 
 __all__ = ["Scenario", "Wind", "BUILTIN_SCENARIOS", "get_scenario", "load_scenario_file",
@@ -254,13 +254,16 @@ def scenario_from_dict(data: dict, source: str = "scenario") -> Scenario:
             raise ValueError("field 'runway' must be a table")
         if not isinstance(wind_data, dict):
             raise ValueError("field 'wind' must be a table")
-        runway_keys = {"length_m", "width_m", "aim_distance_m", "heading_deg", "slope_pct", "size"}
+        runway_keys = {*FIELD_UNITS, "size"}
         for key in runway_data:
             if key not in runway_keys:
                 raise ValueError(f"unknown field 'runway.{key}' (known: {', '.join(sorted(runway_keys))})")
         runway_data = dict(runway_data)
         size = runway_data.pop("size", None)
-        runway = Runway.named(size, **runway_data) if size is not None else Runway(**runway_data)
+        if size is not None:                # a named size, its fields overridden by those given
+            named = Runway.named(size)
+            runway_data = {"length_m": named.length_m, "width_m": named.width_m, **runway_data}
+        runway = Runway.from_json_dict(runway_data, source="", required=(), field_prefix="runway.")
         wind_keys = {f.name for f in fields(Wind)}
         for key in wind_data:
             if key not in wind_keys:
@@ -268,10 +271,7 @@ def scenario_from_dict(data: dict, source: str = "scenario") -> Scenario:
         wind = Wind(**wind_data)
         return Scenario(runway=runway, wind=wind, **kwargs)
     except (TypeError, ValueError) as error:
-        message = str(error)
-        if message.startswith("runway "):
-            message = "field 'runway." + message[len("runway "):].replace(" must", "' must", 1)
-        raise ValueError(f"{source}: {message}") from None
+        raise ValueError(f"{source}: {error}") from None
 
 
 def load_scenario_file(path) -> Scenario:
