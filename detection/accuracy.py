@@ -31,7 +31,18 @@ GROSS_ERROR_PX = 5.0
 
 
 def band_of(distance_m: float) -> str:
-    """Name of the distance band holding ``distance_m`` (metres before the threshold)."""
+    """Name of the distance band (:data:`BANDS`) holding a distance to the threshold.
+
+    Parameters
+    ----------
+    distance_m : float
+        Distance of the aircraft before the runway threshold, metres (along the runway axis).
+
+    Returns
+    -------
+    str
+        The band's name; the nearest band (``"<0.5 km"``) for a distance below every band.
+    """
     for low, high, name in BANDS:
         if low <= distance_m < high:
             return name
@@ -67,12 +78,31 @@ def frame_errors(result, camera: CameraModel, corners_uv, corners_visible, dpsi_
                  dF_true_px: float = math.nan) -> dict:
     """Errors of one :class:`~visland.detection.result.DetectionResult` against its labels.
 
-    Returns a dict: ``found``, ``edge_px`` (worse edge), ``near_left_px``, ``near_right_px``,
-    ``far_left_px``, ``far_right_px`` (NaN where the label is not visible or the corner not
-    measured), ``near_px`` (worse near corner), ``near_along_px`` (signed shift of the threshold's
-    midpoint along the runway's image direction: positive beyond the true threshold), ``corners_withheld`` (visible near corners not
-    reported), ``dpsi_err_deg``, ``dF_err_px``, ``gross`` (found and a corner or edge more than
-    :data:`GROSS_ERROR_PX` off), ``confidence``, ``mode``, ``reason``.
+    Parameters
+    ----------
+    result : DetectionResult
+        The detection of the frame.
+    camera : CameraModel
+        The camera the frame was taken with (pinhole pixels, SPEC convention).
+    corners_uv : array_like, shape (4, 2)
+        Labelled corners, pixels, in :data:`visland.runway.CORNER_NAMES` order.
+    corners_visible : array_like of bool, shape (4,)
+        Which labelled corners are in the image (not hidden).
+    dpsi_true_rad : float
+        True heading deviation of the frame, radians (SPEC sign: positive right of the runway).
+    dF_true_px : float, optional
+        True d_F (seed 001 eq. 18), pixels; NaN when not labelled.
+
+    Returns
+    -------
+    dict
+        ``found``, ``edge_px`` (worse edge), ``near_left_px``, ``near_right_px``,
+        ``far_left_px``, ``far_right_px`` (NaN where the label is not visible or the corner not
+        measured), ``near_px`` (worse near corner), ``near_along_px`` (signed shift of the
+        threshold's midpoint along the runway's image direction: positive beyond the true
+        threshold), ``corners_withheld`` (visible near corners not reported), ``dpsi_err_deg``,
+        ``dF_err_px``, ``gross`` (found and a corner or edge more than :data:`GROSS_ERROR_PX`
+        off, or a corner reported where none is visible), ``confidence``, ``mode``, ``reason``.
     """
     corners_uv = np.asarray(corners_uv, float)
     visible = np.asarray(corners_visible, bool)
@@ -122,9 +152,21 @@ def _stats(values) -> dict:
 def summarise(rows: list[dict], key: str = "band") -> dict:
     """Per-band (and ``"all"``) figures of rows holding :func:`frame_errors` and ``key``.
 
-    Each band: ``frames``, ``found_rate``, ``gross_rate`` (of all frames), ``gross`` (count),
-    ``edge_px``, ``near_corner_px`` (the worse near corner per frame), ``dpsi_abs_err_deg``
-    (median / p95 / max / n each), ``withheld`` (visible near corners not reported).
+    Parameters
+    ----------
+    rows : list of dict
+        One per frame: the keys of :func:`frame_errors` and ``key``.
+    key : str, optional
+        The column grouping the rows: ``"band"`` (the :data:`BANDS`, in their order) or any
+        other column (its values, sorted).
+
+    Returns
+    -------
+    dict
+        Group name -> ``frames``, ``found_rate``, ``gross_rate`` (of all frames), ``gross``
+        (count), ``edge_px``, ``near_corner_px`` (the worse near corner per frame),
+        ``near_along_px``, ``dpsi_abs_err_deg`` (median / p95 / max / n each, over the found
+        frames), ``withheld`` (visible near corners not reported); groups with no row left out.
     """
     names = [b[2] for b in BANDS] if key == "band" else sorted({r[key] for r in rows})
     out = {}
@@ -148,7 +190,20 @@ def summarise(rows: list[dict], key: str = "band") -> dict:
 
 
 def format_table(summary: dict, title: str = "band") -> list[str]:
-    """Lines of a plain-text table of :func:`summarise`'s output."""
+    """Lines of a plain-text table of :func:`summarise`'s output.
+
+    Parameters
+    ----------
+    summary : dict
+        The output of :func:`summarise`.
+    title : str, optional
+        Heading of the first column (the grouping).
+
+    Returns
+    -------
+    list of str
+        A header line, then one line per group (pixels and degrees as medians / p95 / max).
+    """
     lines = [f"{title:22s} {'frames':>6s} {'found':>7s} {'gross':>6s} {'edge med/p95 px':>16s} "
              f"{'near corner med/p95/max px':>27s} {'|dpsi| med/p95 deg':>19s} {'withheld':>8s}"]
     for name, s in summary.items():

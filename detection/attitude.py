@@ -95,6 +95,25 @@ def attitude_from_horizon(camera: CameraModel, point_uv, direction_uv) -> tuple[
     ``n``); the sign puts the image's lower side on the ground. In the body frame
     ``n_B = R_BC n_C = (-sin(theta), sin(phi) cos(theta), cos(phi) cos(theta))``, so
     ``theta = asin(-n_Bx)`` and ``phi = atan2(n_By, n_Bz)``.
+
+    Parameters
+    ----------
+    camera : CameraModel
+        Intrinsics ``K`` and mounting ``R_body_from_camera`` (the mounting is taken as known).
+    point_uv : array_like, shape (2,)
+        A pixel of the horizon line (SPEC convention, pinhole image).
+    direction_uv : array_like, shape (2,)
+        Direction of the horizon line in pixels (any length; normalised here).
+
+    Returns
+    -------
+    roll_rad, pitch_rad : float
+        Body roll and pitch (ZYX Euler, radians) whose horizon, through the camera's mounting,
+        is that line.
+
+    References
+    ----------
+    Gibert, PhD thesis (2016), eq. 3.33 (the ground plane's normal ``n`` in the camera frame).
     """
     p = np.asarray(point_uv, float)
     t = np.asarray(direction_uv, float) / np.linalg.norm(direction_uv)
@@ -121,6 +140,20 @@ def visible_horizon(grey: np.ndarray, ignored: np.ndarray | None = None):
     pixels only), and the horizon is the angle and row where that profile steps most between a
     band above and a band below (a Radon transform of the step: a straight edge across the
     whole frame wins over field boundaries and roads, which are shorter or lie at other angles).
+
+    Parameters
+    ----------
+    grey : ndarray of uint8, shape (H, W)
+        Pinhole frame, grey levels.
+    ignored : ndarray of bool, shape (H, W), optional
+        True where a pixel shows no scene (the aircraft's structure, outside the lens).
+
+    Returns
+    -------
+    tuple or None
+        ``(point_uv, direction_uv, step_grey)``: a pixel of the horizon (shape (2,), SPEC pixels),
+        its unit direction (shape (2,), ``u`` increasing) and the grey-level step across it; None
+        when no step of :data:`MIN_STEP_GREY` grey levels crosses the frame.
     """
     height, width = grey.shape
     scale = WORKING_SIDE_PX / float(max(height, width))
@@ -205,6 +238,22 @@ def attitude_from_image(grey: np.ndarray, camera: CameraModel, ignored: np.ndarr
 
     ``previous``: the last frame's result; its offset between the visible and the true horizon
     (set by the runway's vanishing point, :meth:`ImageAttitude.through_point`) is carried over.
+
+    Parameters
+    ----------
+    grey : ndarray of uint8, shape (H, W)
+        Pinhole frame, grey levels.
+    camera : CameraModel
+        The camera (intrinsics and mounting).
+    ignored : ndarray of bool, shape (H, W), optional
+        True where a pixel shows no scene (:func:`visland.folder.ignored_pixels`).
+    previous : ImageAttitude, optional
+        The previous frame's result.
+
+    Returns
+    -------
+    ImageAttitude or str
+        The attitude, or one sentence saying why the frame gives none.
     """
     found = visible_horizon(grey, ignored)
     if found is None:

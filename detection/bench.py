@@ -28,7 +28,18 @@ __all__ = ["BenchFrames", "frames_from_folder", "render_frames", "run_bench"]
 
 class BenchFrames:
     """Sequences of consecutive RGB frames (what ``detect`` and ``process`` feed the detector)
-    with the camera and the inertial attitude."""
+    with the camera and the inertial attitude.
+
+    Parameters
+    ----------
+    camera : CameraModel
+        The camera the frames were taken with.
+    sequences : list of list of tuple
+        Runs of consecutive frames, each ``(image, roll_rad, pitch_rad)``: an RGB uint8 image
+        (H, W, 3) and the inertial roll and pitch (radians).
+    description : str
+        One line saying where the frames come from (printed with the figures).
+    """
 
     def __init__(self, camera, sequences, description: str):
         self.camera = camera
@@ -41,7 +52,22 @@ class BenchFrames:
 
 
 def frames_from_folder(path, n_sequences: int, length: int) -> BenchFrames:
-    """``n_sequences`` runs of ``length`` consecutive frames spread over a frame folder."""
+    """``n_sequences`` runs of ``length`` consecutive frames spread over a frame folder.
+
+    Parameters
+    ----------
+    path : str or Path
+        A frame folder (SPEC layout: camera.json, frames, telemetry).
+    n_sequences : int
+        Runs wanted, spread evenly over the folder (duplicates merged when it is short).
+    length : int
+        Consecutive frames per run.
+
+    Returns
+    -------
+    BenchFrames
+        Raises ValueError when the folder has fewer than ``length`` frames or a frame cannot be read.
+    """
     from visland.folder import FrameFolder
     folder = FrameFolder(path)
     n = len(folder)
@@ -61,7 +87,26 @@ def frames_from_folder(path, n_sequences: int, length: int) -> BenchFrames:
 
 
 def render_frames(scenario_name: str, size: int, distances_m, length: int, fps: float = 25.0) -> BenchFrames:
-    """Render ``length`` consecutive frames at each distance from the threshold (in memory)."""
+    """Render ``length`` consecutive frames at each distance from the threshold (in memory).
+
+    Parameters
+    ----------
+    scenario_name : str
+        A scenario (:func:`visland.scenarios.resolve_scenario`).
+    size : int
+        Side of the square frames, pixels (the SPEC camera scaled, :meth:`CameraModel.default`).
+    distances_m : sequence of float
+        Distances before the threshold, metres, where each run starts (the nearest simulated step).
+    length : int
+        Frames per run (fewer when the flight ends first).
+    fps : float, optional
+        Camera rate, frames per second.
+
+    Returns
+    -------
+    BenchFrames
+        Raises ValueError when rendering is not available.
+    """
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from visland.camera import CameraModel
     from visland.features import batch_R_camera_from_runway

@@ -127,6 +127,24 @@ class CandidateLines:
     segment's end points known to ``1 / scale`` pixels, extrapolated to the horizon).
     ``polarity`` is the sign of the grey-level change across the line towards +s, ``contrast``
     the median step (grey levels) and ``support`` the fraction of profiles holding that step.
+
+    Attributes
+    ----------
+    s0 : ndarray, shape (n,)
+        Horizon crossing of each line, pixels along the horizon from Q (the line's d_F).
+    k : ndarray, shape (n,)
+        Slope ``ds/dd`` of each line in horizon coordinates (dimensionless).
+    d_a, d_b : ndarray, shape (n,)
+        Depths below the horizon (pixels) of the far and near ends of the span each line was seen
+        over (``d_a < d_b``).
+    sigma_s0 : ndarray, shape (n,)
+        One-sigma uncertainty of ``s0``, pixels.
+    polarity : ndarray of int, shape (n,)
+        +1 (grey rises towards +s) or -1; empty before :func:`check_lines`.
+    contrast : ndarray, shape (n,)
+        Median grey-level step across each line; empty before :func:`check_lines`.
+    support : ndarray, shape (n,)
+        Fraction of each line's profiles holding the step, 0..1; empty before :func:`check_lines`.
     """
 
     s0: np.ndarray
@@ -143,7 +161,21 @@ class CandidateLines:
 
 
 def pencil_normal_uv(horizon: HorizonFrame, k) -> tuple[np.ndarray, np.ndarray]:
-    """Unit direction (towards larger d) and unit normal (towards larger s) of pencil lines, pixels."""
+    """Unit direction (towards larger d) and unit normal (towards larger s) of pencil lines, pixels.
+
+    Parameters
+    ----------
+    horizon : HorizonFrame
+        The frame's horizon (unit direction ``t_uv`` and ground-side normal ``n_uv``).
+    k : float or array_like, shape (...)
+        Slopes ``ds/dd`` of the lines ``s = s0 + k d``.
+
+    Returns
+    -------
+    direction, normal : ndarray, shape (..., 2)
+        Unit pixel vectors along each line (towards larger d, the ground) and across it (towards
+        larger s).
+    """
     k = np.asarray(k, float)[..., None]
     norm = np.sqrt(1.0 + k ** 2)
     direction = (k * horizon.t_uv + horizon.n_uv) / norm
@@ -153,7 +185,36 @@ def pencil_normal_uv(horizon: HorizonFrame, k) -> tuple[np.ndarray, np.ndarray]:
 
 def candidate_lines(segments: Segments, horizon: HorizonFrame, params: DetectorParams,
                  min_depth_px: float = 1.0) -> CandidateLines:
-    """Candidate segments that could be runway lines, merged and in horizon coordinates."""
+    """Candidate segments that could be runway lines, merged and in horizon coordinates.
+
+    Segments are written as ``s = s0 + k d`` (horizon coordinates), kept when steep enough to be a
+    runway line (``|k| <= params.max_edge_slope``), entirely below ``min_depth_px`` and at least
+    ``params.candidate_min_length_fraction * params.min_edge_length_px`` long; the longest
+    ``params.max_candidates`` are merged greedily (longest first) when they lie within
+    ``params.segment_merge_working_px`` working pixels plus ``params.segment_merge_px`` of each
+    other, and each group is re-fitted by length-weighted least squares.
+
+    Parameters
+    ----------
+    segments : Segments
+        Hough segments, full-resolution pixels (:func:`hough_segments`).
+    horizon : HorizonFrame
+        The frame's horizon, which sets the (s, d) coordinates.
+    params : DetectorParams
+        Thresholds named above, scaled to the frame.
+    min_depth_px : float, optional
+        Segments reaching closer than this to the horizon (pixels of depth) are dropped.
+
+    Returns
+    -------
+    CandidateLines
+        Without polarity, contrast or support (set by :func:`check_lines`).
+
+    References
+    ----------
+    Gibert, PhD thesis (2016), 5.3.2.2: runway lines found by the Hough transform, the runway a
+    trapezoid in the image.
+    """
     if len(segments) == 0:
         return CandidateLines(*(np.zeros(0) for _ in range(5)))
     a = horizon.to_sd(segments.uv_a)
@@ -222,6 +283,23 @@ def check_lines(image, horizon: HorizonFrame, lines: CandidateLines, params: Det
     Returns the lines with polarity (sign of the grey-level step towards +s), contrast
     (median step, grey levels) and support (fraction of the span's profiles holding the
     edge); duplicates (two Hough pieces of one edge) are merged.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W)
+        Full-resolution grey frame.
+    horizon : HorizonFrame
+        The frame's horizon.
+    lines : CandidateLines
+        From :func:`candidate_lines`.
+    params : DetectorParams
+        ``check_*`` thresholds, ``min_contrast``, ``pencil_fit_min_sigma_px``,
+        ``crossing_min_sigma_px``, ``duplicate_gap_px``; scaled to the frame.
+
+    Returns
+    -------
+    CandidateLines
+        The lines that hold on the frame, re-fitted, with polarity, contrast and support.
     """
     if len(lines) == 0:
         return lines

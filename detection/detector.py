@@ -45,7 +45,20 @@ __all__ = ["detect_runway", "check_frame"]
 
 
 def check_frame(image, camera: CameraModel) -> str | None:
-    """Why ``image`` cannot be searched (None when it can): type, shape, size, contrast."""
+    """Why ``image`` cannot be searched (None when it can): type, shape, size, contrast.
+
+    Parameters
+    ----------
+    image : object
+        The frame as given: a uint8 ndarray of shape (H, W) or (H, W, 3) is expected.
+    camera : CameraModel
+        The camera; the frame's size must be its ``(width, height)``.
+
+    Returns
+    -------
+    str or None
+        One sentence naming what is wrong (type, shape, dtype, size), or None.
+    """
     if not isinstance(image, np.ndarray):
         return f"frame is a {type(image).__name__}, not an image array"
     if not (image.ndim == 2 or (image.ndim == 3 and image.shape[2] == 3)):
@@ -114,7 +127,27 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     """:func:`detect_runway` on a frame already checked (:func:`check_frame`) and turned into its
     scene frame (:func:`visland.folder.scene_frame`), with ``params`` already scaled to ``camera``:
     for a caller that needs that frame itself (the horizon read off it) and must not prepare it
-    twice. ``start``: ``time.perf_counter()`` when the frame's work began (default now)."""
+    twice.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W) or (H, W, 3)
+        The scene frame (pinhole pixels), grey or RGB.
+    camera : CameraModel
+        The camera.
+    roll_rad, pitch_rad : float
+        Inertial attitude at the frame's time, radians.
+    params : DetectorParams
+        Already scaled to ``camera`` (:meth:`DetectorParams.scaled_to`).
+    previous : DetectionResult, optional
+        The last detection (tracking when found).
+    start : float, optional
+        ``time.perf_counter()`` when the frame's work began (default now).
+
+    Returns
+    -------
+    DetectionResult
+    """
     start = time.perf_counter() if start is None else start
 
     def fail(reason: str) -> DetectionResult:

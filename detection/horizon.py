@@ -145,6 +145,23 @@ def horizon_frame(camera: CameraModel, roll_rad: float, pitch_rad: float) -> Hor
 
     Uses :func:`visland.features.horizon_line` with ``dpsi = 0`` (the horizon does not depend on
     the heading), so Q and the direction of ``s`` are those of the SPEC ``d_F``.
+
+    Parameters
+    ----------
+    camera : CameraModel
+        Intrinsics and mounting (``mount_rpy_rad``).
+    roll_rad, pitch_rad : float
+        Inertial roll and pitch of the body, radians (ZYX Euler, SPEC).
+
+    Returns
+    -------
+    HorizonFrame or None
+        None when the horizon is parallel to the image columns (no Q).
+
+    References
+    ----------
+    Gibert et al., range identification in perspective systems (seed 001), appendix, Fig. 6:
+    Q and the direction of d_F along the horizon.
     """
     R_camera_from_runway_level = batch_R_camera_from_runway(
         np.asarray(roll_rad, float), np.asarray(pitch_rad, float), np.asarray(0.0), camera.mount_rpy_rad)

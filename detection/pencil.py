@@ -70,6 +70,26 @@ class PencilEdges:
     ``k`` slope, ``polarity`` sign of the grey-level change towards larger k (towards +s),
     ``contrast`` mean step (grey levels) over the edge's depth span ``[d_a, d_b]``,
     ``support`` the fraction of that span's bands holding it.
+
+    Attributes
+    ----------
+    s0 : float
+        Horizon crossing (pixels from Q along the horizon) of the pencil's vertex.
+    k : ndarray, shape (n,)
+        Slope ``ds/dd`` of each edge.
+    polarity : ndarray of int, shape (n,)
+        Sign of the grey-level change across each edge towards larger k (towards +s).
+    contrast : ndarray, shape (n,)
+        Mean step over the edge's bands, grey levels.
+    d_a, d_b : ndarray, shape (n,)
+        Depth span (pixels below the horizon) of the bands holding each edge.
+    support : ndarray, shape (n,)
+        Fraction of the bands within that span holding the edge, 0..1.
+    bands : ndarray, shape (b, 2), optional
+        Depth ranges ``(d_lo, d_hi)`` of the bands, pixels.
+    band_profiles : ndarray, shape (b, m), optional
+        Mean grey level of each column of the rectified image over each band (NaN where the
+        column has too few rows in the frame).
     """
 
     s0: float
@@ -115,6 +135,36 @@ def rectify(image, horizon: HorizonFrame, s0: float, k_range: tuple, d_range: tu
     deepest row; rows are one pixel apart (at most ``max_rows``), or with ``geometric_rows``
     spaced in proportion to their depth (the same relative resolution near the horizon,
     where a runway is small, as near the image bottom).
+
+    Parameters
+    ----------
+    image : ndarray, shape (H, W)
+        Full-resolution grey frame (uint8 or float32).
+    horizon : HorizonFrame
+        The frame's horizon, which sets the (s, d) coordinates.
+    s0 : float
+        The pencil's vertex on the horizon, pixels from Q along it (a candidate vanishing point).
+    k_range : tuple of 2 float
+        ``(k_lo, k_hi)``: slopes of the first and last columns.
+    d_range : tuple of 2 float
+        ``(d_lo, d_hi)``: depths (pixels below the horizon) of the first and last rows; rows
+        closer than 1 px to the horizon are not sampled.
+    max_rows, max_columns : int, optional
+        Caps on the rectified image's size (its cost).
+    pixel_step : float, optional
+        Spacing of neighbouring columns at the deepest row, pixels.
+    geometric_rows : bool, optional
+        Rows spaced in proportion to depth instead of evenly.
+
+    Returns
+    -------
+    PencilImage or None
+        None when the ranges are empty or no sample falls in the frame.
+
+    References
+    ----------
+    Gibert, PhD thesis (2016), 5.3.2.2: the runway's lines all meet at its vanishing point, the
+    runway a trapezoid in the image.
     """
     d_lo, d_hi = max(float(d_range[0]), 1.0), float(d_range[1])
     k_lo, k_hi = float(k_range[0]), float(k_range[1])
@@ -169,6 +219,18 @@ def pencil_edges(rect: PencilImage, params: DetectorParams) -> PencilEdges:
     steps are differences over ``pencil_step_halfspan_px`` each side, at least
     ``pencil_min_step_fraction * min_contrast`` grey levels; steps of neighbouring bands within
     ``pencil_join_tolerance_px`` are joined; at most ``pencil_max_edges`` edges, strongest first.
+
+    Parameters
+    ----------
+    rect : PencilImage
+        From :func:`rectify`.
+    params : DetectorParams
+        The ``pencil_*`` parameters and ``min_contrast``.
+
+    Returns
+    -------
+    PencilEdges
+        With the bands and their mean column profiles (used to score pairs of edges).
     """
     band_ratio, min_band = params.pencil_band_ratio, params.pencil_band_min_px
     min_step = params.pencil_min_step_fraction * params.min_contrast
@@ -247,7 +309,18 @@ def pencil_edges(rect: PencilImage, params: DetectorParams) -> PencilEdges:
 def as_slice(mask: np.ndarray):
     """A boolean ``mask`` whose true entries are one run (rows or columns of a pencil image
     between two depths or slopes) as the equivalent slice, so that indexing with it is a view
-    instead of a copy; any other mask is returned as it is."""
+    instead of a copy; any other mask is returned as it is.
+
+    Parameters
+    ----------
+    mask : ndarray of bool, shape (n,)
+        Which rows (or columns) to take.
+
+    Returns
+    -------
+    slice or ndarray of bool
+        The slice when the true entries are one run, else ``mask``.
+    """
     index = np.flatnonzero(mask)
     if len(index) and index[-1] - index[0] + 1 == len(index):
         return slice(int(index[0]), int(index[-1]) + 1)
@@ -256,7 +329,19 @@ def as_slice(mask: np.ndarray):
 
 def row_quantile(values: np.ndarray, q: float) -> np.ndarray:
     """Quantile ``q`` of each row ignoring NaN (NaN where a row has none): vectorised, unlike
-    ``np.nanpercentile`` along an axis."""
+    ``np.nanpercentile`` along an axis.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n, m)
+        Rows of values, NaN for missing.
+    q : float
+        Quantile, 0..1 (the nearest order statistic, not interpolated).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
     if values.ndim != 2 or values.shape[1] == 0:
         return np.full(len(values), np.nan)
     ordered = np.sort(values, axis=1)                      # NaN sort last
@@ -267,7 +352,17 @@ def row_quantile(values: np.ndarray, q: float) -> np.ndarray:
 
 
 def row_mean(values: np.ndarray) -> np.ndarray:
-    """Mean of each row ignoring NaN (NaN for a row without values, without a warning)."""
+    """Mean of each row ignoring NaN (NaN for a row without values, without a warning).
+
+    Parameters
+    ----------
+    values : ndarray, shape (n, m)
+        Rows of values, NaN for missing.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
     finite = np.isfinite(values)
     count = finite.sum(axis=1)
     total = np.where(finite, values, 0.0).sum(axis=1)
@@ -276,7 +371,17 @@ def row_mean(values: np.ndarray) -> np.ndarray:
 
 
 def finite_median(values) -> float:
-    """Median of the finite values (NaN when there are none, without a warning)."""
+    """Median of the finite values (NaN when there are none, without a warning).
+
+    Parameters
+    ----------
+    values : array_like
+        Any shape; NaN and infinities are left out.
+
+    Returns
+    -------
+    float
+    """
     values = np.asarray(values, float)
     values = values[np.isfinite(values)]
     return float(median_of(values)) if values.size else math.nan

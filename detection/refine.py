@@ -40,7 +40,15 @@ KERNEL_ROOM_PX = 3.0
 @dataclass(frozen=True)
 class PixelLine:
     """A line in pixels: a point on it and a unit direction; the normal is the direction turned
-    by +90 deg in the image (``(-e_v, e_u)``)."""
+    by +90 deg in the image (``(-e_v, e_u)``).
+
+    Attributes
+    ----------
+    point : ndarray, shape (2,)
+        A pixel on the line (SPEC convention: (0, 0) at the centre of the top-left pixel).
+    direction : ndarray, shape (2,)
+        Unit direction of the line in pixels.
+    """
 
     point: np.ndarray
     direction: np.ndarray
@@ -109,7 +117,13 @@ class LineFit:
 @dataclass(frozen=True)
 class NoFit:
     """Why a line could not be refined: false in a boolean test, so ``if not fit`` reads as
-    "no line", and the reason travels to the measurement row."""
+    "no line", and the reason travels to the measurement row.
+
+    Attributes
+    ----------
+    reason : str
+        One sentence saying why (carried into the detection's reason and notes).
+    """
 
     reason: str
 
@@ -120,7 +134,18 @@ class NoFit:
 def median_of(values):
     """``np.median(values)`` of all the values, the same number and type (NaN if any is NaN), in
     a quarter of the time on the short arrays the detector takes medians of (numpy's median
-    spends most of its time on generality: axes, masked arrays, ``out``)."""
+    spends most of its time on generality: axes, masked arrays, ``out``).
+
+    Parameters
+    ----------
+    values : array_like
+        Any shape; all values count.
+
+    Returns
+    -------
+    numpy scalar
+        The median, of the type ``np.median`` returns.
+    """
     a = np.asarray(values)
     n = a.size
     if n == 0 or a.dtype.kind != "f":
@@ -140,7 +165,17 @@ def median_of(values):
 
 
 def chroma_of(rgb: np.ndarray) -> np.ndarray:
-    """Chroma of a uint8 RGB image: largest minus smallest channel, (H, W) uint8 (0 for greys)."""
+    """Chroma of a uint8 RGB image: largest minus smallest channel, (H, W) uint8 (0 for greys).
+
+    Parameters
+    ----------
+    rgb : ndarray of uint8, shape (H, W, 3)
+        Colour frame.
+
+    Returns
+    -------
+    ndarray of uint8, shape (H, W)
+    """
     r, g, b = cv2.split(np.ascontiguousarray(rgb))
     return cv2.subtract(cv2.max(cv2.max(r, g), b), cv2.min(cv2.min(r, g), b))
 
@@ -233,15 +268,26 @@ def edge_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
 
     Parameters
     ----------
-    profiles : (n, m) grey levels; offsets : (m,) their positions along the normal.
-    polarity : +1 (grey rises along the normal), -1 (falls) or 0 (strongest of either).
-    window : (n, m) bool, optional
+    profiles : ndarray, shape (n, m)
+        Grey levels across the line (:func:`sample_profiles`), NaN outside the frame.
+    offsets : ndarray, shape (m,)
+        Position of each sample along the line's normal, pixels (evenly spaced).
+    polarity : int
+        +1 (grey rises along the normal), -1 (falls) or 0 (strongest of either).
+    window : ndarray of bool, shape (n, m), optional
         Where each profile may hold its edge.
 
     Returns
     -------
-    position : (n,) offset of the edge (NaN where the profile has none).
-    strength : (n,) absolute grey-level slope at the edge (grey levels per pixel).
+    position : ndarray, shape (n,)
+        Offset of the edge, pixels (NaN where the profile has none).
+    strength : ndarray, shape (n,)
+        Absolute grey-level slope at the edge (grey levels per pixel).
+
+    References
+    ----------
+    Dickmanns and Schell, autonomous landing by dynamic machine vision (seed 004): runway borders
+    located by gradient templates in windows around their prediction.
     """
     step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
     g = _derivative(profiles, step)
@@ -268,7 +314,25 @@ def transition_offsets(profiles: np.ndarray, offsets: np.ndarray, window: np.nda
     ``side_px`` beyond the centre minus the mean as far before it, so a bright border stripe
     does not flip it.
 
-    Returns ``(position, strength, net_step)`` (NaN where none).
+    Parameters
+    ----------
+    profiles : ndarray, shape (n, m)
+        Grey levels across the line, NaN outside the frame.
+    offsets : ndarray, shape (m,)
+        Position of each sample along the normal, pixels (evenly spaced).
+    window : ndarray of bool, shape (n, m)
+        Where each profile may hold its transition.
+    halfspan_px : float, optional
+        Half width of the centroid window around the strongest gradient, pixels.
+    side_px : tuple of 2 float, optional
+        ``(near, far)``: the grey levels for the net step are averaged between these distances
+        beyond and before the centre, pixels.
+
+    Returns
+    -------
+    position, strength, net_step : ndarray, shape (n,)
+        Centre offset (pixels; NaN where none), the strongest gradient (grey levels per pixel)
+        and the net step (grey levels, along the normal; NaN where none).
     """
     step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
     n, m = profiles.shape
@@ -316,8 +380,39 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
 
     Profiles should be sampled finely (0.5 px); the derivative is the central difference.
 
-    Returns ``(position, strength)``: offsets (NaN where none) and the flank's grey-level
-    slope (grey levels per pixel).
+    Parameters
+    ----------
+    profiles : ndarray, shape (n, m)
+        Grey levels across the boundary, NaN outside the frame.
+    offsets : ndarray, shape (m,)
+        Position of each sample along the normal, pixels (evenly spaced, 0.5 px apart).
+    outward : int
+        +1/-1: the direction (along +/- offsets) of the region's outside.
+    window : ndarray of bool, shape (n, m)
+        Where each profile may hold its strongest step.
+    stripe_reach_px : float or ndarray, shape (n,)
+        Widest border stripe looked past, pixels (one per profile or for all).
+    flank_ratio : float, optional
+        An opposite step outwards of the strongest is the stripe's outer flank when it reaches
+        this fraction of the strongest step's slope.
+    centroid_halfwidth_px : float, optional
+        Half width of the window of a flank's centroid, pixels.
+    stripe_shift : tuple of 3 float, optional
+        ``(amplitude_px, start_px, scale_px)`` of the correction for an unresolved stripe's outer
+        flank: ``amplitude * exp(-(max(separation - start, 0) / scale) ** 1.5)`` pixels inwards,
+        ``separation`` the distance between the stripe's two flanks (calibration in the code).
+    outer_flank : bool, optional
+        Place the boundary by extrapolating the outer flank of the chosen lobe (its 60 % and
+        20 % crossings) instead of at the lobe's centroid.
+    flank_bias_px : float, optional
+        Offset (pixels, outwards) of that extrapolation for an area-sampled step, removed.
+
+    Returns
+    -------
+    position : ndarray, shape (n,)
+        Offset of the boundary, pixels (NaN where none).
+    strength : ndarray, shape (n,)
+        The chosen flank's grey-level slope (grey levels per pixel).
     """
     step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
     n, m = profiles.shape
@@ -430,10 +525,23 @@ def stripe_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
     and for one many pixels wide. The edges are searched within ``max_width_px`` (scalar or
     one per profile) of the profile's extreme grey level.
 
+    Parameters
+    ----------
+    profiles : ndarray, shape (n, m)
+        Grey levels across the line, NaN outside the frame.
+    offsets : ndarray, shape (m,)
+        Position of each sample along the normal, pixels (evenly spaced).
+    polarity : int
+        +1 for a bright stripe, -1 for a dark one.
+    max_width_px : float or ndarray, shape (n,)
+        Widest stripe expected, pixels (at least 2 samples are searched).
+
     Returns
     -------
-    position : (n,) offset of the stripe centre (NaN where none).
-    height : (n,) grey-level height of the stripe above its surroundings.
+    position : ndarray, shape (n,)
+        Offset of the stripe centre, pixels (NaN where none).
+    height : ndarray, shape (n,)
+        Grey-level height of the stripe above its surroundings.
     """
     step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
     n, m = profiles.shape
@@ -469,7 +577,27 @@ def fit_line(points: np.ndarray, weights: np.ndarray, min_sigma_px: float = 0.05
              iterations: int = 4) -> tuple[PixelLine, np.ndarray, float] | None:
     """Weighted total-least-squares line with Tukey biweight re-weighting.
 
-    Returns ``(line, inlier mask, robust sigma)`` or None with fewer than 3 usable points.
+    The scale is the median absolute deviation of the residuals (about their median) times
+    1.4826, floored at ``min_sigma_px``; weights are Tukey's biweight with the cut-off 4.685 scales
+    (95 % efficiency under Gaussian noise).
+
+    Parameters
+    ----------
+    points : ndarray, shape (n, 2)
+        Edge points, pixels (rows with NaN are not used).
+    weights : ndarray, shape (n,)
+        Non-negative prior weights (edge strengths); points of weight 0 are not used.
+    min_sigma_px : float, optional
+        Floor of the robust scale, pixels.
+    iterations : int, optional
+        Re-weighting passes.
+
+    Returns
+    -------
+    tuple or None
+        ``(line, inliers, sigma_px)``: the :class:`PixelLine` (point at the weighted centroid),
+        the inlier mask over ``points`` (shape (n,)) and the robust scale (pixels); None with fewer
+        than 3 usable points.
     """
     pts = np.asarray(points, float)
     w0 = np.asarray(weights, float)
@@ -516,18 +644,24 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
     image : ndarray (H, W)
         Full-resolution grey frame (uint8 or float32).
     line : PixelLine
-        Predicted line; ``t_range = (t0, t1)`` is the span sampled, in pixels along
-        ``line.direction`` from ``line.point``.
-    kind : "edge" or "stripe"
-    polarity : +1/-1 (sign of the grey change along ``line.normal``, or bright/dark stripe),
+        Predicted line (pixels).
+    t_range : tuple of 2 float
+        ``(t0, t1)``: the span sampled, pixels along ``line.direction`` from ``line.point``.
+    kind : {"edge", "stripe"}
+        A step edge (or a region's boundary, with ``outward``) or a painted stripe.
+    polarity : int
+        +1/-1: sign of the grey change along ``line.normal`` (edges), bright/dark (stripes);
         0 to take the stronger of either (edges only).
     halfwidth_px : float or callable
         First search band (or a function of the position t along the line giving it); each
         later pass halves it (not below ``params.refine_min_band_px``).
-    outward : 0, or +1/-1: the side of the line (along +/- ``line.normal``) where the runway's
+    outward : int
+        0, or +1/-1: the side of the line (along +/- ``line.normal``) where the runway's
         outside lies. The edge is then the region's boundary (:func:`boundary_offsets`): past
-        a painted border stripe up to ``outward_reach_px`` wide (scalar or callable of the
-        position t along the line).
+        a painted border stripe up to ``outward_reach_px`` wide.
+    outward_reach_px : float or callable
+        Widest border stripe looked past, pixels (or a function of the position t along the
+        line giving it).
     stripe_width_px : callable t -> width or None
         Widest stripe expected at each position (stripes only).
     net_polarity : int
@@ -656,6 +790,25 @@ def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float,
     line fitted to those points replaces the grey one when they cover ``params.chroma_min_span``
     of the grey line's span; otherwise NoFit with the reason (the chroma does not tell: grey
     ground, haze, a grey-level camera).
+
+    Parameters
+    ----------
+    colour : ndarray of uint8, shape (H, W, 3)
+        The RGB frame.
+    fit : LineFit
+        The boundary refined on grey levels.
+    outward : int
+        +1/-1: the side of ``fit.line`` (along +/- its normal) where the region's outside lies.
+    reach_px : float
+        How far inside the grey line the chroma boundary is searched, pixels (a border stripe's
+        width).
+    params : DetectorParams, optional
+        ``chroma_min_change``, ``chroma_min_span``, ``chroma_samples``.
+
+    Returns
+    -------
+    LineFit or NoFit
+        The boundary on the chroma (support and contrast those of ``fit``), or why not.
     """
     params = params or DetectorParams()
     min_change, min_span = params.chroma_min_change, params.chroma_min_span

@@ -136,5 +136,17 @@ class DetectionResult:
 
 
 def not_found(reason: str, **fields_) -> DetectionResult:
-    """A result that found nothing, with its reason (every feature NaN, confidence 0)."""
+    """A result that found nothing, with its reason (every feature NaN, confidence 0).
+
+    Parameters
+    ----------
+    reason : str
+        One sentence saying why.
+    **fields_
+        Other :class:`DetectionResult` fields (attitude, image size, mode, elapsed time).
+
+    Returns
+    -------
+    DetectionResult
+    """
     return DetectionResult(found=False, reason=reason, confidence=0.0, **fields_)

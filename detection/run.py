@@ -25,7 +25,23 @@ __all__ = ["FolderDetection", "detect_folder", "write_measurements"]
 
 @dataclass
 class FolderDetection:
-    """Rows of ``measurements.csv`` and a summary of a folder run."""
+    """Rows of ``measurements.csv`` and a summary of a folder run.
+
+    Attributes
+    ----------
+    rows : list of dict
+        One :meth:`DetectionResult.to_measurement_row` per frame, in frame order.
+    n_found : int
+        Frames where the runway was found.
+    n_unusable : int
+        Frames that could not be read.
+    n_tracking : int
+        Found frames tracked from the previous frame.
+    analysis_s : float
+        Seconds spent detecting (reading frames excluded).
+    wall_s : float
+        Seconds for the whole run.
+    """
 
     rows: list = field(default_factory=list)
     n_found: int = 0
@@ -47,7 +63,24 @@ class FolderDetection:
 
 def detect_folder(folder, params: DetectorParams | None = None, progress: bool = True,
                   max_frames: int | None = None) -> FolderDetection:
-    """Detect the runway in every frame of a :class:`visland.folder.FrameFolder`."""
+    """Detect the runway in every frame of a :class:`visland.folder.FrameFolder`.
+
+    Parameters
+    ----------
+    folder : FrameFolder
+        The frames, their times, the telemetry (or none: the horizon is then read off each frame)
+        and the camera.
+    params : DetectorParams, optional
+        Detector parameters (defaults: :class:`DetectorParams`), rescaled to the camera.
+    progress : bool, optional
+        Show a progress bar.
+    max_frames : int, optional
+        Detect only the first frames.
+
+    Returns
+    -------
+    FolderDetection
+    """
     params = params or DetectorParams()
     out = FolderDetection()
     sequence = DetectionSequence(folder.camera, params)
@@ -83,7 +116,15 @@ def _detect_one(folder, index: int, sequence: DetectionSequence, out: FolderDete
 
 
 def write_measurements(result: FolderDetection, path) -> None:
-    """Write ``measurements.csv`` atomically."""
+    """Write ``measurements.csv`` atomically.
+
+    Parameters
+    ----------
+    result : FolderDetection
+        The rows to write.
+    path : str or Path
+        The CSV to write (its folder is created).
+    """
     path = Path(path)
     if path.parent and not path.parent.exists():
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -50,9 +50,15 @@ STRIPES_FROM_THRESHOLD_WIDTHS = 6.0 / 45.0
 class ThresholdMarking:
     """The threshold marking found inside the pavement: the threshold line and how it was placed.
 
-    ``kind`` is ``"bar"`` (a transverse bar: the threshold at its near edge) or ``"stripes"``
-    (the threshold 6 m before them); ``pavement_widths`` the paved length before the marking,
-    in runway widths.
+    Attributes
+    ----------
+    line : TransverseLine
+        The threshold line placed from the marking, with its corners.
+    kind : str
+        ``"bar"`` (a transverse bar: the threshold at its near edge) or ``"stripes"`` (the
+        threshold 6 m before them, :data:`STRIPES_FROM_THRESHOLD_WIDTHS`).
+    pavement_widths : float
+        The paved length before the marking, in runway widths.
     """
 
     line: TransverseLine
@@ -100,6 +106,10 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         brighter than the pavement by at least as much.
     min_pavement_widths, max_pavement_widths : float
         The marking must begin between these many runway widths inside the pavement.
+    n_columns : int, optional
+        Samples along each transverse line between the edges.
+    step_d_px : float, optional
+        Spacing of the transverse lines read, pixels of depth.
     min_resolved_px : float, optional
         Depth pixels the first ``min_pavement_widths`` of pavement must span for the marking to
         be looked for: below it the stripes a threshold at the pavement's start carries (6 m in,
@@ -230,6 +240,34 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     the grey-level step from the ground to the runway's surface (the smaller of the two sides), or
     None when the frame cannot tell (no clear difference between the runway and the ground beside
     it, rows outside the image) or the pavement runs to ``d_to``.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W)
+        Grey levels.
+    horizon : HorizonFrame
+        The frame's horizon.
+    s0 : float
+        The runway's vanishing point V1 on the horizon, pixels from Q.
+    left, right : PixelLine
+        The runway's edges.
+    d_from : float
+        Depth (pixels below the horizon) of the threshold found so far.
+    d_to : float
+        Deepest row searched, pixels (towards the camera).
+    surface_level : float
+        The runway surface's own grey level (:func:`visland.detection.transverse.surface_extent`).
+    min_step : float
+        The surface must differ from the ground beside each edge by this many grey levels.
+    step_d_px : float, optional
+        Spacing of the transverse lines read, pixels of depth.
+    min_ground_px : float, optional
+        Depth (pixels) of consecutive ground rows that counts as the ground beginning.
+
+    Returns
+    -------
+    tuple of 2 float or None
+        ``(depth_px, step)`` as above, or None.
     """
     line_left, line_right = left.homogeneous(), right.homogeneous()
     sd_left = horizon.to_sd(_meet(line_left, _horizon_parallel(horizon, d_from)))

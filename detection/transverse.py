@@ -39,7 +39,15 @@ __all__ = ["TransverseLine", "SurfaceExtent", "find_transverse_line", "surface_e
 class SurfaceExtent(tuple):
     """``(d_far, d_near)``: depths where the runway's surface ends; ``.level``: the surface's own
     grey level between its markings (the lower quartile across a dark runway, the upper one
-    across a bright one), read where both edges are well supported."""
+    across a bright one), read where both edges are well supported.
+
+    Parameters
+    ----------
+    d_far, d_near : float
+        Depths below the horizon (pixels) of the surface's far and near ends.
+    level : float
+        The surface's grey level between its markings.
+    """
 
     def __new__(cls, d_far: float, d_near: float, level: float):
         extent = super().__new__(cls, (float(d_far), float(d_near)))
@@ -96,6 +104,33 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     width; such rows still belong to the runway up to ``marking_fraction`` runway widths
     along it (ICAO threshold stripes and the strip before them: 36 m on a 45 m runway), in
     depth ``marking_fraction * width_px * d / fx``.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W)
+        Full-resolution grey frame.
+    horizon : HorizonFrame
+        The frame's horizon, which sets the (s, d) coordinates.
+    s0 : float
+        The runway's vanishing point V1 on the horizon, pixels from Q.
+    k_left, k_right : float
+        Slopes ``ds/dd`` of the left and right edges through V1.
+    d_support : tuple of 2 float
+        ``(d_far, d_near)``: depths (pixels) over which both edges are supported; its middle
+        (``strip_core_margin``-style 20 % trimmed each end) is the reference.
+    d_window : tuple of 2 float
+        ``(d_min, d_max)``: depths searched (pixels below the horizon).
+    step_d_px : float, optional
+        Row spacing near the horizon, pixels of depth.
+    marking_fraction : float, optional
+        Reach of a band of blended threshold markings along the runway, in runway widths.
+    max_rows : int, optional
+        Most rows resampled (rows spaced geometrically when the cap is reached).
+
+    Returns
+    -------
+    SurfaceExtent or None
+        None when the surface cannot be told from the ground at the reference depths.
     """
     width = k_right - k_left
     # rows every half pixel near the horizon and at most max_rows of them (geometric beyond)
@@ -221,6 +256,47 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
 
     Returns None when no step stands out of the profile's noise by ``min_significance`` or
     reaches a quarter of ``min_step`` grey levels per pixel (in grey and in chroma).
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W)
+        Full-resolution grey frame.
+    horizon : HorizonFrame
+        The frame's horizon.
+    s0 : float
+        The runway's vanishing point V1 on the horizon, pixels from Q.
+    left, right : PixelLine
+        The refined left and right edges.
+    d_expected : float
+        Depth (pixels below the horizon) where the surface ends.
+    d_window : tuple of 2 float
+        ``(d_min, d_max)``: depths searched, pixels.
+    outward : int
+        +1 for the threshold (outside at larger depth), -1 for the runway end.
+    min_step : float
+        Smallest grey-level step (grey levels) that counts.
+    n_columns : int, optional
+        Transverse samples between the edges, at 10 % to 90 % of the width.
+    step_d_px : float, optional
+        Spacing of the transverse lines, pixels of depth.
+    min_significance : float, optional
+        A step must stand out of the profile's noise by this factor.
+    marking_fraction : float, optional
+        Reach of a band of threshold markings along the runway, in runway widths.
+    colour : ndarray of uint8, shape (H, W, 3), optional
+        The RGB frame, for the chroma profile.
+    min_chroma_step : float, optional
+        Smallest chroma change (levels) for the chroma step to be used.
+    surface_level : float, optional
+        The runway surface's own grey level (:func:`surface_extent`), NaN if unknown.
+
+    Returns
+    -------
+    TransverseLine or None
+
+    References
+    ----------
+    Gibert, PhD thesis (2016), Fig. 3.5 and Remark 5.3.1: the threshold corners P', P''.
     """
     d_min, d_max = (float(x) for x in d_window)
     if not (math.isfinite(d_min) and math.isfinite(d_max)) or d_max - d_min < 6 * step_d_px:

@@ -42,7 +42,19 @@ __all__ = ["Prediction", "RunwayHypothesis", "vanishing_point_candidates", "runw
 
 @dataclass(frozen=True)
 class Prediction:
-    """The runway expected in this frame (from the previous detection), horizon coordinates."""
+    """The runway expected in this frame (from the previous detection), horizon coordinates.
+
+    Attributes
+    ----------
+    s0 : float
+        Vanishing point V1 on the horizon, pixels from Q along it.
+    k_left, k_right : float
+        Slopes ``ds/dd`` of the left and right edges (horizon coordinates).
+    d_far, d_near : float
+        Depths (pixels below the horizon) of the far and near ends of the edges' support.
+    sigma_px : float
+        One-sigma motion (pixels) of the runway from the prediction, widening the search band.
+    """
 
     s0: float
     k_left: float
@@ -54,7 +66,29 @@ class Prediction:
 
 @dataclass(frozen=True)
 class RunwayHypothesis:
-    """A left/right edge pair through one horizon point, with its evidence."""
+    """A left/right edge pair through one horizon point, with its evidence.
+
+    Attributes
+    ----------
+    s0 : float
+        Vanishing point V1 on the horizon, pixels from Q along it.
+    k_left, k_right : float
+        Slopes ``ds/dd`` of the left and right edges; the centre line is at
+        ``k_centre = (k_left + k_right) / 2``.
+    d_far, d_near : float
+        Depths (pixels below the horizon) over which both edges are seen.
+    polarity_left, polarity_right : int
+        Sign of each edge's grey-level step towards +s (0: unknown, a prediction).
+    score : float
+        The trapezoid model's ranking score (larger is better; comparable within one frame).
+    centre_polarity : int
+        +1 bright / -1 dark centre stripe found midway, 0 none.
+    centre_support : float
+        Fraction of the depth bands holding the centre stripe, 0..1.
+    evidence : dict
+        The terms of the score (symmetry, contrast, interior, spread, ends, prior, ...) for
+        diagnostics; ``{"predicted": True}`` for a hypothesis made from a prediction.
+    """
 
     s0: float
     k_left: float
@@ -79,6 +113,28 @@ def vanishing_point_candidates(lines: CandidateLines, params: DetectorParams, ma
 
     Returns ``(s0, weight, (k_min, k_max), (d_min, d_max))`` per point: the lines' slopes and
     depths, to bound the search around it. A prediction is always a candidate.
+
+    Parameters
+    ----------
+    lines : CandidateLines
+        Checked candidate lines (:func:`visland.detection.candidates.check_lines`).
+    params : DetectorParams
+        ``vp_min_line_support``, ``min_contrast``, ``vp_line_weight_max_px``, ``vp_tolerance_px``,
+        ``vp_sigma_factor``.
+    max_points : int, optional
+        Most points returned (besides the prediction).
+    prediction : Prediction, optional
+        The runway expected from the previous frame: its point comes first.
+
+    Returns
+    -------
+    list of tuple
+        ``(s0, weight, (k_min, k_max), (d_min, d_max))`` per point (pixels from Q; summed line
+        weight, ``inf`` for the prediction; slopes and depths of its lines).
+
+    References
+    ----------
+    Gibert, PhD thesis (2016), 5.3.2.2: the runway's lines meet on the horizon.
     """
     out = []
     usable = ((lines.support >= params.vp_min_line_support) & (lines.contrast >= params.min_contrast)
@@ -116,7 +172,33 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
                       prediction: Prediction | None = None,
                       bottom_depth_px: float = math.inf) -> list[RunwayHypothesis]:
     """Rank left/right edge pairs by the trapezoid model and the image evidence (best first;
-    at most ``params.max_hypotheses``)."""
+    at most ``params.max_hypotheses``).
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W)
+        Full-resolution grey frame.
+    horizon : HorizonFrame
+        The frame's horizon, which sets the (s, d) coordinates.
+    lines : CandidateLines
+        Checked candidate lines.
+    params : DetectorParams
+        The ``vp_*``, ``pencil_*``, ``pair_*``, ``score_*``, ``strip_*`` parameters, scaled.
+    prediction : Prediction, optional
+        The runway expected from the previous frame (tracking): the search is bounded around it
+        and hypotheses agreeing with it are preferred.
+    bottom_depth_px : float, optional
+        Deepest depth visible in the frame (pixels below the horizon).
+
+    Returns
+    -------
+    list of RunwayHypothesis
+
+    References
+    ----------
+    Gibert, PhD thesis (2016), 5.3.2.2 and Fig. 5.13: the runway, whose two edges are parallel,
+    is a trapezoid in the image; its symmetry is what the detector looks for.
+    """
     hypotheses = []
     tracking = prediction is not None
     points = vanishing_point_candidates(lines, params, prediction=prediction,

@@ -22,7 +22,7 @@ CLI_MODULES = ("visland.cli", "visland.footage_cli", "visland.render.cli", "visl
 
 #: Packages whose every public module documents every public function and class (a new module
 #: of theirs is checked as soon as it exists).
-DOCUMENTED_PACKAGES = ("visland", "visland.render", "visland.tracking", "visland.estimation")
+DOCUMENTED_PACKAGES = ("visland", "visland.render", "visland.detection", "visland.tracking", "visland.estimation")
 
 #: Modules, in the packages not yet documented throughout, whose whole public API is documented.
 DOCUMENTED_MODULES = ("visland.datasets.batch", "visland.datasets.compare", "visland.datasets.generate",
