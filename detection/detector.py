@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -278,22 +278,25 @@ def _predict(previous: DetectionResult, ctx: _Context, ground):
 
     The camera's rotation between the two frames (roll and pitch from the inertial unit; the
     heading change is unknown and taken as zero) moves every image point by the homography
-    ``H = K R_now R_before^T K^-1``; the translation over one frame is left to the search band.
+    ``H_now_from_before = K R_cam_from_runway_now R_cam_from_runway_before^T K^-1`` (pixels of
+    the previous frame to pixels of this one); the translation over one frame is left to the
+    search band.
     """
     camera, horizon, params = ctx.camera, ctx.horizon, ctx.params
-    dpsi = previous.dpsi_rad if math.isfinite(previous.dpsi_rad) else 0.0
+    dpsi_rad = previous.dpsi_rad if math.isfinite(previous.dpsi_rad) else 0.0
     if not (math.isfinite(previous.roll_rad) and math.isfinite(previous.pitch_rad)):
         return None, None
-    R_before = batch_R_camera_from_runway(np.asarray(previous.roll_rad), np.asarray(previous.pitch_rad),
-                                          np.asarray(dpsi), camera.mount_rpy_rad)
-    R_now = batch_R_camera_from_runway(np.asarray(ctx.roll), np.asarray(ctx.pitch), np.asarray(dpsi),
-                                       camera.mount_rpy_rad)
+    R_cam_from_runway_before = batch_R_camera_from_runway(np.asarray(previous.roll_rad),
+                                                          np.asarray(previous.pitch_rad), np.asarray(dpsi_rad),
+                                                          camera.mount_rpy_rad)
+    R_cam_from_runway_now = batch_R_camera_from_runway(np.asarray(ctx.roll), np.asarray(ctx.pitch),
+                                                       np.asarray(dpsi_rad), camera.mount_rpy_rad)
     K = camera.K
-    H = K @ R_now @ R_before.T @ np.linalg.inv(K)
+    H_now_from_before = K @ R_cam_from_runway_now @ R_cam_from_runway_before.T @ np.linalg.inv(K)
 
     def carry(uv):
         uv = np.asarray(uv, float).reshape(-1, 2)
-        p = np.concatenate([uv, np.ones((len(uv), 1))], axis=1) @ H.T
+        p = np.concatenate([uv, np.ones((len(uv), 1))], axis=1) @ H_now_from_before.T
         return p[:, :2] / p[:, 2:3]
 
     ends = {}
@@ -302,18 +305,18 @@ def _predict(previous: DetectionResult, ctx: _Context, ground):
         if not np.all(np.isfinite(seg)):
             return None, None
         ends[name] = carry(seg)
-    s0_l, k_l = horizon.pencil_from_points(ends["left"][0], ends["left"][1])
-    s0_r, k_r = horizon.pencil_from_points(ends["right"][0], ends["right"][1])
-    if not all(math.isfinite(float(x)) for x in (s0_l, k_l, s0_r, k_r)):
+    s0_left_edge, k_left_edge = horizon.pencil_from_points(ends["left"][0], ends["left"][1])
+    s0_right_edge, k_right_edge = horizon.pencil_from_points(ends["right"][0], ends["right"][1])
+    if not all(math.isfinite(float(x)) for x in (s0_left_edge, k_left_edge, s0_right_edge, k_right_edge)):
         return None, None
-    s0 = 0.5 * (float(s0_l) + float(s0_r))
-    sd = horizon.to_sd(np.concatenate([ends["left"], ends["right"]]))
-    d_far, d_near = float(sd[:, 1].min()), float(sd[:, 1].max())
+    s0 = 0.5 * (float(s0_left_edge) + float(s0_right_edge))
+    ends_sd = horizon.to_sd(np.concatenate([ends["left"], ends["right"]]))
+    d_far, d_near = float(ends_sd[:, 1].min()), float(ends_sd[:, 1].max())
     if d_near <= 1.0:
         return None, None
     mid = 0.5 * (d_far + d_near)
-    k_left = float(k_l) + (float(s0_l) - s0) / mid
-    k_right = float(k_r) + (float(s0_r) - s0) / mid
+    k_left = float(k_left_edge) + (float(s0_left_edge) - s0) / mid
+    k_right = float(k_right_edge) + (float(s0_right_edge) - s0) / mid
     points = [ends["left"], ends["right"]]
     corners = np.asarray(previous.corners_uv, float)[np.asarray(previous.corners_found, bool)]
     if len(corners):
@@ -486,18 +489,108 @@ def _fuse_vanishing_point(horizon: HorizonFrame, fits, sigma_horizon_px: float) 
     return np.linalg.solve(A, b)
 
 
+@dataclass(frozen=True)
+class _EdgePair:
+    """The two refined edges of one runway, in horizon coordinates (s along the horizon from Q,
+    d below it, pixels; :mod:`visland.detection.horizon`).
+
+    ``s0_*`` is where an edge meets the horizon, ``k_*`` its slope ``ds/dd`` and
+    ``sigma_s0_*_px`` the one-sigma uncertainty of ``s0_*``; ``tolerance_px`` how far apart the
+    two crossings may be; ``segment_*_uv`` the (far, near) pixel ends of each edge's supported
+    stretch, and ``[d_far, d_near]`` the depths both edges are seen over.
+    """
+
+    fits: dict
+    s0_left: float
+    k_left: float
+    sigma_s0_left_px: float
+    s0_right: float
+    k_right: float
+    sigma_s0_right_px: float
+    tolerance_px: float
+    segment_left_uv: np.ndarray
+    segment_right_uv: np.ndarray
+    d_far: float
+    d_near: float
+
+    @property
+    def d_mid(self) -> float:
+        return 0.5 * (self.d_far + self.d_near)
+
+
+@dataclass(frozen=True)
+class _TransverseLines:
+    """The threshold and runway-end lines of a measurement, their corners and what is missing."""
+
+    corners_uv: np.ndarray
+    corners_found: np.ndarray
+    threshold_line: tuple
+    end_line: tuple
+    notes: list
+
+
 def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, prediction: Prediction | None = None):
     """Refine a hypothesis into a measurement, or say why it fails.
 
+    Steps: each edge refined and validated (:func:`_refine_edges`), the two checked as one
+    runway's sides (:func:`_pair_edges`), the centre line between them (:func:`_centre_line`),
+    the vanishing point and the heading deviation (:func:`_heading`), the threshold and the
+    runway end (:func:`_threshold_and_end`) and the confidence (:func:`_confidence`).
+
     With a ``prediction`` (tracking straight from the previous frame), the edges are searched
     in a band as wide as the prediction's uncertainty and must land within it.
+
+    Returns ``(DetectionResult, None)`` or ``(None, reason)``.
     """
-    horizon, params, camera = ctx.horizon, ctx.params, ctx.camera
+    camera = ctx.camera
+    bottom_depth = _deepest_visible(ctx.horizon, camera.width, camera.height)
+    fits, why = _refine_edges(ctx, hypothesis, prediction, bottom_depth)
+    if fits is None:
+        return None, why
+    pair, why = _pair_edges(ctx, fits, prediction)
+    if pair is None:
+        return None, why
+    notes = [f"{name} edge {fit.note}" for name, fit in fits.items() if fit.note]
+    centre_fit, centre_note = _centre_line(ctx, pair, hypothesis.centre_polarity)
+    if centre_note:
+        notes.append(centre_note)
+    heading, why = _heading(ctx, pair, centre_fit)
+    if heading is None:
+        return None, why
+    vp_uv, dF_px, dpsi_rad = heading
+    transverse = _threshold_and_end(ctx, pair, vp_uv, bottom_depth)
+    notes.extend(transverse.notes)
+    confidence, why = _confidence(ctx.params, pair, centre_fit)
+    if confidence is None:
+        return None, why
+    lines = {name: _line_chart(camera, fits[name].line.homogeneous()) for name in ("left", "right")}
+    lines["center"] = (_line_chart(camera, centre_fit.line.homogeneous()) if centre_fit is not None
+                       else (math.nan, math.nan))
+    segments = {"left": pair.segment_left_uv, "right": pair.segment_right_uv,
+                "center": (_segment_in_depth(ctx.horizon, centre_fit) if centre_fit is not None
+                           else np.full((2, 2), np.nan))}
+    fit_of = {"left": fits["left"], "right": fits["right"], "center": centre_fit}
+    return DetectionResult(
+        found=True, reason="; ".join(notes), confidence=float(confidence), corners_uv=transverse.corners_uv,
+        corners_found=transverse.corners_found, lines=lines,
+        line_residual_px={n: (f.residual_px if f is not None else math.nan) for n, f in fit_of.items()},
+        line_support={n: (f.support if f is not None else 0.0) for n, f in fit_of.items()},
+        segments_uv=segments, threshold_line=transverse.threshold_line, end_line=transverse.end_line,
+        vanishing_point_uv=vp_uv, horizon=ctx.horizon_line, dF_px=dF_px, dpsi_rad=dpsi_rad, roll_rad=ctx.roll,
+        pitch_rad=ctx.pitch, mode=mode, roi=tuple(int(a) for a in roi), image_size=(camera.width, camera.height),
+        elapsed_s=time.perf_counter() - ctx.start, notes=tuple(notes)), None
+
+
+def _refine_edges(ctx: _Context, hypothesis: RunwayHypothesis, prediction: Prediction | None,
+                  bottom_depth: float) -> tuple[dict | None, str | None]:
+    """The left and right edges of ``hypothesis`` refined on the frame, each long, supported and
+    straight enough (and, tracking, near its prediction): ``({"left", "right"} -> LineFit, None)``
+    or ``(None, reason)``."""
+    horizon, params = ctx.horizon, ctx.params
     fits = {}
     width_slope = hypothesis.k_right - hypothesis.k_left
     halfwidth = params.search_halfwidth_px if prediction is None else max(params.search_halfwidth_px,
                                                                           prediction.sigma_px)
-    bottom_depth = _deepest_visible(horizon, camera.width, camera.height)
     # where the strip's surface starts and ends, before fitting its edges there (beyond its
     # ends, texture lined up with an edge would turn the fit)
     extent = surface_extent(ctx.image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
@@ -526,64 +619,97 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
             if not moved <= 2.5 * prediction.sigma_px:
                 return None, f"{name} edge: {moved:.0f} px from its prediction"
         fits[name] = fit
-    s0_l, k_l, sig_l = _pencil_of(horizon, fits["left"])
-    s0_r, k_r, sig_r = _pencil_of(horizon, fits["right"])
-    if not all(math.isfinite(x) for x in (s0_l, k_l, s0_r, k_r)):
+    return fits, None
+
+
+def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tuple[_EdgePair | None, str | None]:
+    """The two refined edges as one runway's sides: they meet on the horizon, are seen over a
+    common stretch of depth, do not cross below the horizon and (tracking) are as far apart as
+    predicted. ``(_EdgePair, None)`` or ``(None, reason)``."""
+    horizon, params = ctx.horizon, ctx.params
+    s0_left, k_left, sigma_s0_left_px = _pencil_of(horizon, fits["left"])
+    s0_right, k_right, sigma_s0_right_px = _pencil_of(horizon, fits["right"])
+    if not all(math.isfinite(x) for x in (s0_left, k_left, s0_right, k_right)):
         return None, "edges parallel to the horizon"
-    tolerance = params.vp_tolerance_px + 3.0 * math.hypot(sig_l, sig_r)
-    if abs(s0_l - s0_r) > tolerance:
-        return None, (f"edges meet the horizon {abs(s0_l - s0_r):.1f} px apart (tolerance {tolerance:.1f} px): "
+    tolerance = params.vp_tolerance_px + 3.0 * math.hypot(sigma_s0_left_px, sigma_s0_right_px)
+    if abs(s0_left - s0_right) > tolerance:
+        return None, (f"edges meet the horizon {abs(s0_left - s0_right):.1f} px apart (tolerance {tolerance:.1f} px): "
                       "not the two sides of one runway")
-    seg_l, seg_r = _segment_in_depth(horizon, fits["left"]), _segment_in_depth(horizon, fits["right"])
-    d_far = max(horizon.to_sd(seg_l)[0, 1], horizon.to_sd(seg_r)[0, 1])
-    d_near = min(horizon.to_sd(seg_l)[1, 1], horizon.to_sd(seg_r)[1, 1])
+    segment_left_uv, segment_right_uv = _segment_in_depth(horizon, fits["left"]), _segment_in_depth(horizon,
+                                                                                                    fits["right"])
+    d_far = max(horizon.to_sd(segment_left_uv)[0, 1], horizon.to_sd(segment_right_uv)[0, 1])
+    d_near = min(horizon.to_sd(segment_left_uv)[1, 1], horizon.to_sd(segment_right_uv)[1, 1])
     # the two sides of one runway are seen over a common stretch of depth (a quarter of the
     # shorter one at least); two lines supported over disjoint depths are two other objects
-    span_l, span_r = (float(np.ptp(horizon.to_sd(seg)[:, 1])) for seg in (seg_l, seg_r))
-    if d_near - d_far < max(params.min_edge_length_px, 0.25 * min(span_l, span_r)):
+    span_left_px, span_right_px = (float(np.ptp(horizon.to_sd(segment)[:, 1]))
+                                   for segment in (segment_left_uv, segment_right_uv))
+    if d_near - d_far < max(params.min_edge_length_px, 0.25 * min(span_left_px, span_right_px)):
         return None, (f"the two edges overlap over {max(d_near - d_far, 0.0):.0f} px of depth only (their supports "
-                      f"span {span_l:.0f} and {span_r:.0f} px): not the two sides of one runway")
-    if not (s0_l + k_l * d_near < s0_r + k_r * d_near):
+                      f"span {span_left_px:.0f} and {span_right_px:.0f} px): not the two sides of one runway")
+    if not (s0_left + k_left * d_near < s0_right + k_right * d_near):
         return None, "the edges cross below the horizon"
     if prediction is not None:
         # the runway's width over the camera height (k_R - k_L = W / h) changes by a few per
         # cent a second; a parallel taxiway or road is half as wide or less
         d_mid_check = 0.5 * (d_far + d_near)
-        width_now = ((s0_r + k_r * d_mid_check) - (s0_l + k_l * d_mid_check)) / d_mid_check
+        width_now = ((s0_right + k_right * d_mid_check) - (s0_left + k_left * d_mid_check)) / d_mid_check
         width_before = prediction.k_right - prediction.k_left
         if not abs(width_now / width_before - 1.0) <= params.max_width_change:
             return None, (f"the edges are {width_now / width_before:.2f} times as far apart as predicted: "
                           "not the runway tracked so far")
-    notes = [f"{name} edge {fit.note}" for name, fit in fits.items() if fit.note]
-    # centre line: midway between the edges in horizon coordinates (harmonic conjugate)
-    weights = np.array([1.0 / max(sig_l, 1e-3) ** 2, 1.0 / max(sig_r, 1e-3) ** 2])
-    s0 = float((weights @ np.array([s0_l, s0_r])) / weights.sum())
-    d_mid = 0.5 * (d_far + d_near)
-    k_c = 0.5 * ((s0_l + k_l * d_mid - s0) + (s0_r + k_r * d_mid - s0)) / d_mid
-    centre_fit = _refine_centre(ctx, s0, k_c, k_l, k_r, d_far, d_near, hypothesis.centre_polarity)
-    all_fits = [fits["left"], fits["right"]]
+    return _EdgePair(fits=fits, s0_left=s0_left, k_left=k_left, sigma_s0_left_px=sigma_s0_left_px,
+                     s0_right=s0_right, k_right=k_right, sigma_s0_right_px=sigma_s0_right_px, tolerance_px=tolerance,
+                     segment_left_uv=segment_left_uv, segment_right_uv=segment_right_uv, d_far=d_far,
+                     d_near=d_near), None
+
+
+def _centre_line(ctx: _Context, pair: _EdgePair, polarity_hint: int) -> tuple[LineFit | None, str]:
+    """The centre line midway between the edges in horizon coordinates (the harmonic conjugate of
+    the horizon with respect to the edges, :mod:`visland.detection.horizon`), kept when it meets
+    the horizon where the edges do: ``(LineFit or None, note)`` (the note empty when found)."""
+    horizon, params = ctx.horizon, ctx.params
+    weights = np.array([1.0 / max(pair.sigma_s0_left_px, 1e-3) ** 2, 1.0 / max(pair.sigma_s0_right_px, 1e-3) ** 2])
+    s0 = float((weights @ np.array([pair.s0_left, pair.s0_right])) / weights.sum())
+    d_mid = pair.d_mid
+    k_centre = 0.5 * ((pair.s0_left + pair.k_left * d_mid - s0) + (pair.s0_right + pair.k_right * d_mid - s0)) / d_mid
+    centre_fit = _refine_centre(ctx, s0, k_centre, pair.k_left, pair.k_right, pair.d_far, pair.d_near, polarity_hint)
     if centre_fit is None:
-        notes.append("centre line not found")
-    else:
-        s0_c, _, sig_c = _pencil_of(horizon, centre_fit)
-        if abs(s0_c - s0) > params.vp_tolerance_px + 3.0 * math.hypot(sig_c, min(sig_l, sig_r)):
-            notes.append("centre line rejected (does not meet the edges on the horizon)")
-            centre_fit = None
-        else:
-            all_fits.append(centre_fit)
+        return None, "centre line not found"
+    s0_centre, _, sigma_s0_centre_px = _pencil_of(horizon, centre_fit)
+    sigma_edges_px = min(pair.sigma_s0_left_px, pair.sigma_s0_right_px)
+    if abs(s0_centre - s0) > params.vp_tolerance_px + 3.0 * math.hypot(sigma_s0_centre_px, sigma_edges_px):
+        return None, "centre line rejected (does not meet the edges on the horizon)"
+    return centre_fit, ""
+
+
+def _heading(ctx: _Context, pair: _EdgePair, centre_fit: LineFit | None):
+    """The vanishing point fused from the lines and the horizon, d_F and the heading deviation
+    (seed 001 eq. 18-19): ``((vp_uv, dF_px, dpsi_rad), None)``, or ``(None, reason)`` when the
+    runway's direction is too far off the aircraft's heading to be the runway approached."""
+    horizon, params, camera = ctx.horizon, ctx.params, ctx.camera
+    all_fits = [pair.fits["left"], pair.fits["right"]] + ([centre_fit] if centre_fit is not None else [])
     vp_uv = _fuse_vanishing_point(horizon, all_fits, params.horizon_sigma_px)
     vp_xy = camera.pixels_to_normalized(vp_uv)
-    dF = float(dF_from_vanishing_point(vp_xy[None, :], np.array([horizon.rho]), np.array([horizon.theta]),
-                                       camera)[0])
-    dpsi = float(dpsi_from_dF(np.array([dF]), np.array([ctx.roll]), np.array([ctx.pitch]), camera)[0])
-    if not abs(dpsi) <= math.radians(params.max_heading_deviation_deg):
+    dF_px = float(dF_from_vanishing_point(vp_xy[None, :], np.array([horizon.rho]), np.array([horizon.theta]),
+                                          camera)[0])
+    dpsi_rad = float(dpsi_from_dF(np.array([dF_px]), np.array([ctx.roll]), np.array([ctx.pitch]), camera)[0])
+    if not abs(dpsi_rad) <= math.radians(params.max_heading_deviation_deg):
         # a runway being approached lies ahead: its direction within tens of degrees of the
         # aircraft's heading (a crossing taxiway or road meets the horizon far to the side)
-        return None, (f"the edges meet the horizon {math.degrees(dpsi):+.0f} deg off the aircraft's heading "
+        return None, (f"the edges meet the horizon {math.degrees(dpsi_rad):+.0f} deg off the aircraft's heading "
                       f"(> {params.max_heading_deviation_deg:g}): not a runway being approached")
-    s0_vp = float(horizon.to_sd(vp_uv)[0])
+    return (vp_uv, dF_px, dpsi_rad), None
 
-    # threshold and runway end
+
+def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom_depth: float) -> _TransverseLines:
+    """The threshold and the runway end: where the runway's surface ends along it, the transverse
+    steps there through V2 (:mod:`visland.detection.transverse`), the threshold moved to where
+    the pavement ends or to a threshold marking (:mod:`visland.detection.threshold_marking`),
+    the runway end withheld when nearer than a runway's length; their corners where in the image."""
+    horizon, params, camera = ctx.horizon, ctx.params, ctx.camera
+    fits, d_far, d_near, d_mid = pair.fits, pair.d_far, pair.d_near, pair.d_mid
+    s0_vp = float(horizon.to_sd(vp_uv)[0])
+    notes = []
     corners = np.full((4, 2), np.nan)
     corners_found = np.zeros(4, dtype=bool)
     threshold_line = end_line = (math.nan, math.nan)
@@ -591,12 +717,13 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     width, height = camera.width, camera.height
     edges_reach_border = d_near >= bottom_depth - 3.0
     min_step = params.min_contrast
-    width_slope = abs(k_r - k_l)
+    width_slope = abs(pair.k_right - pair.k_left)
     # where the runway's surface ends (more reliable than where its edges fade)
     # the edges' slopes as lines through the fused vanishing point, at mid depth
-    k_l_vp = (s0_l + k_l * d_mid - s0_vp) / d_mid
-    k_r_vp = (s0_r + k_r * d_mid - s0_vp) / d_mid
-    extent = surface_extent(ctx.image, horizon, s0_vp, k_l_vp, k_r_vp, (d_far, d_near), (1.0, bottom_depth))
+    k_left_through_vp = (pair.s0_left + pair.k_left * d_mid - s0_vp) / d_mid
+    k_right_through_vp = (pair.s0_right + pair.k_right * d_mid - s0_vp) / d_mid
+    extent = surface_extent(ctx.image, horizon, s0_vp, k_left_through_vp, k_right_through_vp, (d_far, d_near),
+                            (1.0, bottom_depth))
     d_near_expected, d_far_expected = d_near, d_far
     surface_level = math.nan
     if extent is not None:
@@ -609,7 +736,8 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
 
     # the runway's surface running out of the bottom of the image hides the threshold: a step
     # found there would be a marking (the last second before the threshold)
-    d_exit = _depth_leaving_image(horizon, s0_vp, 0.5 * (k_l_vp + k_r_vp), d_mid, bottom_depth, width, height)
+    d_exit = _depth_leaving_image(horizon, s0_vp, 0.5 * (k_left_through_vp + k_right_through_vp), d_mid, bottom_depth,
+                                  width, height)
     if d_near_expected >= d_exit - 2.0:
         near = None
         edges_reach_border = True
@@ -685,11 +813,17 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
             if camera.in_image(uv, margin_px=0.0):
                 corners[index] = uv
                 corners_found[index] = True
+    return _TransverseLines(corners, corners_found, threshold_line, end_line, notes)
 
-    # confidence: support, straightness, agreement on the horizon, contrast, centre line
+
+def _confidence(params: DetectorParams, pair: _EdgePair, centre_fit: LineFit | None) -> tuple[float | None, str | None]:
+    """A heuristic 0..1 confidence from the edges' support, straightness, agreement on the
+    horizon and contrast, and whether the centre line was found: ``(confidence, None)``, or
+    ``(None, reason)`` below ``params.min_confidence``."""
+    fits = pair.fits
     q_support = math.sqrt(fits["left"].support * fits["right"].support)
     q_residual = math.exp(-0.5 * (max(fits["left"].residual_px, fits["right"].residual_px) / 0.8) ** 2)
-    chi = abs(s0_l - s0_r) / max(tolerance / 3.0, 1e-6)
+    chi = abs(pair.s0_left - pair.s0_right) / max(pair.tolerance_px / 3.0, 1e-6)
     q_vp = math.exp(-0.5 * (chi / 3.0) ** 2)
     q_contrast = min(1.0, min(fits["left"].contrast, fits["right"].contrast) / (4.0 * params.min_contrast))
     confidence = q_support * q_residual * q_vp * math.sqrt(q_contrast) * (1.0 if centre_fit is not None else 0.85)
@@ -697,40 +831,26 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         return None, (f"{_WEAK} (confidence {confidence:.2f} < {params.min_confidence:g}: "
                       f"support {q_support:.2f}, residual {q_residual:.2f}, horizon agreement {q_vp:.2f}, "
                       f"contrast {q_contrast:.2f})")
-    lines = {name: _line_chart(camera, fits[name].line.homogeneous()) for name in ("left", "right")}
-    lines["center"] = (_line_chart(camera, centre_fit.line.homogeneous()) if centre_fit is not None
-                       else (math.nan, math.nan))
-    segments = {"left": seg_l, "right": seg_r,
-                "center": _segment_in_depth(horizon, centre_fit) if centre_fit is not None else np.full((2, 2), np.nan)}
-    fit_of = {"left": fits["left"], "right": fits["right"], "center": centre_fit}
-    return DetectionResult(
-        found=True, reason="; ".join(notes), confidence=float(confidence), corners_uv=corners,
-        corners_found=corners_found, lines=lines,
-        line_residual_px={n: (f.residual_px if f is not None else math.nan) for n, f in fit_of.items()},
-        line_support={n: (f.support if f is not None else 0.0) for n, f in fit_of.items()},
-        segments_uv=segments, threshold_line=threshold_line, end_line=end_line, vanishing_point_uv=vp_uv,
-        horizon=ctx.horizon_line, dF_px=dF, dpsi_rad=dpsi, roll_rad=ctx.roll, pitch_rad=ctx.pitch, mode=mode,
-        roi=tuple(int(a) for a in roi), image_size=(width, height), elapsed_s=time.perf_counter() - ctx.start,
-        notes=tuple(notes)), None
+    return confidence, None
 
 
-def _refine_centre(ctx: _Context, s0, k_c, k_l, k_r, d_far, d_near, polarity_hint: int) -> LineFit | None:
+def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, polarity_hint: int) -> LineFit | None:
     """The centre line (a painted stripe, often dashed) midway between the edges."""
     horizon, params = ctx.horizon, ctx.params
-    line = _pencil_pixel_line(horizon, s0, k_c, 0.5 * (d_far + d_near))
-    scale = math.sqrt(1 + k_c * k_c)
+    line = _pencil_pixel_line(horizon, s0, k_centre, 0.5 * (d_far + d_near))
+    scale = math.sqrt(1 + k_centre * k_centre)
     d_ref = 0.5 * (d_far + d_near)
     t_lo, t_hi = (d_far - d_ref) * scale, (d_near - d_ref) * scale
     img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, 8.0)
     t_lo, t_hi = max(t_lo, img_lo), min(t_hi, img_hi)
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi - t_lo < params.min_edge_length_px:
         return None
-    width_near = abs(k_r - k_l) * d_near / scale
+    width_near = abs(k_right - k_left) * d_near / scale
     halfwidth = float(np.clip(0.08 * width_near, 3.0, params.search_halfwidth_px * 3))
 
     def stripe_width(t):
         depth = d_ref + np.asarray(t) / scale
-        return np.maximum(0.06 * np.abs(k_r - k_l) * depth / scale, 2.0)
+        return np.maximum(0.06 * np.abs(k_right - k_left) * depth / scale, 2.0)
 
     best = None
     for polarity in ((polarity_hint,) if polarity_hint else (1, -1)):
