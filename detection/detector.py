@@ -166,12 +166,13 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     if not horizon.crosses_image(camera.width, camera.height, params.horizon_margin_px):
         return fail(f"horizon from roll {math.degrees(roll):.1f} deg, pitch {math.degrees(pitch):.1f} deg "
                     "lies outside the image")
-    ground = horizon.ground_bbox(camera.width, camera.height, margin_px=2.0)
+    ground = horizon.ground_bbox(camera.width, camera.height, margin_px=params.ground_margin_px)
     if ground is None:
         return fail("no ground below the horizon in the image")
     u0, v0, u1, v1 = ground
-    sample = image[v0:v1:4, u0:u1:4]
-    spread = _percentile_spread(sample, 1.0, 99.0) if sample.size else 0.0
+    step = params.contrast_sample_step
+    sample = image[v0:v1:step, u0:u1:step]
+    spread = _percentile_spread(sample, *params.contrast_percentiles) if sample.size else 0.0
     if spread < params.min_contrast:
         return fail(f"frame has no contrast below the horizon (grey levels within {spread:.0f})")
 
@@ -326,10 +327,10 @@ def _predict(previous: DetectionResult, ctx: _Context, ground):
     margin = params.roi_margin_px + params.roi_margin_fraction * float(max(hi - lo))
     roi = (max(ground[0], int(math.floor(lo[0] - margin))), max(ground[1], int(math.floor(lo[1] - margin))),
            min(ground[2], int(math.ceil(hi[0] + margin)) + 1), min(ground[3], int(math.ceil(hi[1] + margin)) + 1))
-    if roi[2] - roi[0] < 8 or roi[3] - roi[1] < 8:
+    if roi[2] - roi[0] < params.roi_min_side_px or roi[3] - roi[1] < params.roi_min_side_px:
         return None, None
     width_near = abs(k_right - k_left) * d_near
-    sigma = params.tracking_sigma_px + 0.05 * width_near
+    sigma = params.tracking_sigma_px + params.tracking_sigma_width_fraction * width_near
     prediction = Prediction(s0=s0, k_left=k_left, k_right=k_right, d_far=d_far, d_near=d_near, sigma_px=sigma)
     return prediction, roi
 
@@ -388,20 +389,23 @@ def _image_span(line: PixelLine, width: int, height: int, margin: float = 1.0) -
 
 
 def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slope: float,
-                 halfwidth_px: float, band_fraction: float = 0.1, iterations: int | None = None) -> LineFit | NoFit:
+                 halfwidth_px: float, band_fraction: float, iterations: int | None = None) -> LineFit | NoFit:
     """Sub-pixel edge along the pencil line (s0, k) between depths ``d_far`` and ``d_near``.
 
     ``outward_s`` is the side (in s) of the runway's outside; ``width_slope`` the runway's width
-    per pixel of depth (``k_R - k_L``): a painted side stripe up to 4 % of the local width
-    (ICAO: 0.9 m on runways 30 m and wider, so 1.5 to 3 %) plus the blur is looked past to
-    its outer boundary, which is the runway's edge.
+    per pixel of depth (``k_R - k_L``): a painted side stripe up to
+    ``params.side_stripe_width_fraction`` of the local width plus the blur
+    (``params.edge_blur_px``) is looked past to its outer boundary, which is the runway's edge.
+    The band searched is ``band_fraction`` of the local width, between
+    ``params.edge_band_min_px`` and ``halfwidth_px``.
     """
     horizon, params = ctx.horizon, ctx.params
     d_ref = 0.5 * (d_far + d_near)
     line = _pencil_pixel_line(horizon, s0, k, d_ref)
     scale = math.sqrt(1 + k * k)
     t_lo, t_hi = (max(1.0, d_far) - d_ref) * scale, (d_near - d_ref) * scale
-    img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, params.search_halfwidth_px + 4)
+    img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height,
+                                 params.search_halfwidth_px + params.edge_image_margin_px)
     t_lo, t_hi = max(t_lo, img_lo), min(t_hi, img_hi)
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi - t_lo < params.min_edge_length_px:
         return NoFit(f"its candidate lies in the image over less than {params.min_edge_length_px:.0f} px")
@@ -410,7 +414,7 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
 
     def reach(t):
         depth = np.maximum(d_ref + np.asarray(t) / scale, 0.0)
-        return 0.04 * abs(width_slope) * depth / scale + 1.5
+        return params.side_stripe_width_fraction * abs(width_slope) * depth / scale + params.edge_blur_px
 
     def band(t):
         # never wider than a tenth of the runway's local width (a quarter when tracking a
@@ -418,7 +422,7 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
         # zone) would become the strongest step
         depth = np.maximum(d_ref + np.asarray(t) / scale, 0.0)
         width = abs(width_slope) * depth / scale
-        return np.clip(band_fraction * width, 2.0, halfwidth_px)
+        return np.clip(band_fraction * width, params.edge_band_min_px, halfwidth_px)
 
     def refine(image):
         return refine_line(image, line, (t_lo, t_hi), "edge", polarity=0, halfwidth_px=band,
@@ -430,7 +434,7 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
     # grey pavement against coloured ground: the chroma steps at the edge even where the side
     # stripe, blended with the asphalt, has the grass's grey level (then the grey step is weak
     # or sits on the stripe's inner edge)
-    if not fit or fit.extent[1] - fit.extent[0] < 0.5 * (t_hi - t_lo):
+    if not fit or fit.extent[1] - fit.extent[0] < params.chroma_retry_extent_fraction * (t_hi - t_lo):
         on_chroma = refine(ctx.colour)
         if on_chroma and (not fit or on_chroma.extent[1] - on_chroma.extent[0] > fit.extent[1] - fit.extent[0]):
             return on_chroma
@@ -438,10 +442,10 @@ def _refine_edge(ctx: _Context, s0, k, d_far, d_near, outward_s: int, width_slop
             return NoFit(f"{fit.reason} (in chroma: {on_chroma.reason})" if not on_chroma else fit.reason)
     if fit:
         t_fit = np.array(fit.extent) + (fit.line.point - line.point) @ line.direction
-        stripe_px = float(np.max(reach(t_fit))) - 1.5
-        # a side stripe 3 px wide or more is resolved and the grey boundary is already exact
-        if stripe_px < 3.0:
-            on_chroma = chroma_boundary(ctx.colour, fit, outward_s * sign, stripe_px + 1.5, params)
+        stripe_px = float(np.max(reach(t_fit))) - params.edge_blur_px
+        # a side stripe this wide or more is resolved and the grey boundary is already exact
+        if stripe_px < params.chroma_resolved_stripe_px:
+            on_chroma = chroma_boundary(ctx.colour, fit, outward_s * sign, stripe_px + params.edge_blur_px, params)
             fit = on_chroma if on_chroma else replace(fit, note=f"placed on grey levels ({on_chroma.reason})")
     return fit
 
@@ -464,13 +468,13 @@ def _segment_in_depth(horizon: HorizonFrame, fit: LineFit) -> np.ndarray:
     return ends if depth[0] <= depth[1] else ends[::-1]
 
 
-def _fuse_vanishing_point(horizon: HorizonFrame, fits, sigma_horizon_px: float) -> np.ndarray:
+def _fuse_vanishing_point(horizon: HorizonFrame, fits, sigma_horizon_px: float, min_sigma_px: float) -> np.ndarray:
     """Least-squares vanishing point of the runway lines and the horizon (pixels).
 
     Minimises ``sum_i (n_i . p - c_i)^2 / sigma_i^2 + (n_h . p - c_h)^2 / sigma_h^2`` where each
     line's sigma is its fitted uncertainty extrapolated to the horizon: the lines fix the
     point along the horizon, the inertial horizon keeps it from sliding along lines that are
-    nearly parallel (a far runway).
+    nearly parallel (a far runway). Line sigmas are floored at ``min_sigma_px``.
     """
     A = np.zeros((2, 2))
     b = np.zeros(2)
@@ -479,7 +483,7 @@ def _fuse_vanishing_point(horizon: HorizonFrame, fits, sigma_horizon_px: float) 
         n, c = h[:2], -h[2]
         s0, k, _ = _pencil_of(horizon, fit)
         crossing = horizon.vanishing_point_uv(s0) if math.isfinite(s0) else fit.line.point
-        w = 1.0 / max(fit.sigma_at(crossing), 0.02) ** 2
+        w = 1.0 / max(fit.sigma_at(crossing), min_sigma_px) ** 2
         A += w * np.outer(n, n)
         b += w * c * n
     n_h = horizon.n_uv
@@ -595,13 +599,14 @@ def _refine_edges(ctx: _Context, hypothesis: RunwayHypothesis, prediction: Predi
     # ends, texture lined up with an edge would turn the fit)
     extent = surface_extent(ctx.image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
                             (hypothesis.d_far, hypothesis.d_near), (1.0, bottom_depth), marking_fraction=0.0,
-                            max_rows=300)
+                            max_rows=params.edge_surface_rows)
     d_lo, d_hi = (hypothesis.d_far, hypothesis.d_near) if extent is None else extent
-    inset = 0.03 * (d_hi - d_lo)
+    inset = params.edge_depth_inset_fraction * (d_hi - d_lo)
     for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
         fit = _refine_edge(ctx, hypothesis.s0, k, d_lo + inset, d_hi - inset, outward, width_slope, halfwidth,
-                           band_fraction=0.05 if prediction is None else 0.15,
-                           iterations=None if prediction is None else 1)
+                           band_fraction=(params.edge_band_fraction if prediction is None
+                                          else params.tracking_edge_band_fraction),
+                           iterations=None if prediction is None else params.tracking_refine_iterations)
         if not fit:
             return None, f"{name} edge: {fit.reason}"
         length = fit.extent[1] - fit.extent[0]
@@ -616,7 +621,7 @@ def _refine_edges(ctx: _Context, hypothesis: RunwayHypothesis, prediction: Predi
             s0_fit, k_fit, _ = _pencil_of(horizon, fit)
             k_pred = prediction.k_left if name == "left" else prediction.k_right
             moved = np.abs((s0_fit + k_fit * depths) - (prediction.s0 + k_pred * depths)).max()
-            if not moved <= 2.5 * prediction.sigma_px:
+            if not moved <= params.prediction_gate_sigmas * prediction.sigma_px:
                 return None, f"{name} edge: {moved:.0f} px from its prediction"
         fits[name] = fit
     return fits, None
@@ -631,7 +636,8 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
     s0_right, k_right, sigma_s0_right_px = _pencil_of(horizon, fits["right"])
     if not all(math.isfinite(x) for x in (s0_left, k_left, s0_right, k_right)):
         return None, "edges parallel to the horizon"
-    tolerance = params.vp_tolerance_px + 3.0 * math.hypot(sigma_s0_left_px, sigma_s0_right_px)
+    tolerance = params.vp_tolerance_px + params.edge_crossing_sigmas * math.hypot(sigma_s0_left_px,
+                                                                                   sigma_s0_right_px)
     if abs(s0_left - s0_right) > tolerance:
         return None, (f"edges meet the horizon {abs(s0_left - s0_right):.1f} px apart (tolerance {tolerance:.1f} px): "
                       "not the two sides of one runway")
@@ -640,10 +646,11 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
     d_far = max(horizon.to_sd(segment_left_uv)[0, 1], horizon.to_sd(segment_right_uv)[0, 1])
     d_near = min(horizon.to_sd(segment_left_uv)[1, 1], horizon.to_sd(segment_right_uv)[1, 1])
     # the two sides of one runway are seen over a common stretch of depth (a quarter of the
-    # shorter one at least); two lines supported over disjoint depths are two other objects
+    # shorter one at least, params.pair_min_overlap_fraction); two lines supported over disjoint depths are two other objects
     span_left_px, span_right_px = (float(np.ptp(horizon.to_sd(segment)[:, 1]))
                                    for segment in (segment_left_uv, segment_right_uv))
-    if d_near - d_far < max(params.min_edge_length_px, 0.25 * min(span_left_px, span_right_px)):
+    if d_near - d_far < max(params.min_edge_length_px,
+                            params.pair_min_overlap_fraction * min(span_left_px, span_right_px)):
         return None, (f"the two edges overlap over {max(d_near - d_far, 0.0):.0f} px of depth only (their supports "
                       f"span {span_left_px:.0f} and {span_right_px:.0f} px): not the two sides of one runway")
     if not (s0_left + k_left * d_near < s0_right + k_right * d_near):
@@ -677,7 +684,8 @@ def _centre_line(ctx: _Context, pair: _EdgePair, polarity_hint: int) -> tuple[Li
         return None, "centre line not found"
     s0_centre, _, sigma_s0_centre_px = _pencil_of(horizon, centre_fit)
     sigma_edges_px = min(pair.sigma_s0_left_px, pair.sigma_s0_right_px)
-    if abs(s0_centre - s0) > params.vp_tolerance_px + 3.0 * math.hypot(sigma_s0_centre_px, sigma_edges_px):
+    if abs(s0_centre - s0) > params.vp_tolerance_px + params.edge_crossing_sigmas * math.hypot(sigma_s0_centre_px,
+                                                                                                sigma_edges_px):
         return None, "centre line rejected (does not meet the edges on the horizon)"
     return centre_fit, ""
 
@@ -688,7 +696,7 @@ def _heading(ctx: _Context, pair: _EdgePair, centre_fit: LineFit | None):
     runway's direction is too far off the aircraft's heading to be the runway approached."""
     horizon, params, camera = ctx.horizon, ctx.params, ctx.camera
     all_fits = [pair.fits["left"], pair.fits["right"]] + ([centre_fit] if centre_fit is not None else [])
-    vp_uv = _fuse_vanishing_point(horizon, all_fits, params.horizon_sigma_px)
+    vp_uv = _fuse_vanishing_point(horizon, all_fits, params.horizon_sigma_px, params.vp_line_min_sigma_px)
     vp_xy = camera.pixels_to_normalized(vp_uv)
     dF_px = float(dF_from_vanishing_point(vp_xy[None, :], np.array([horizon.rho]), np.array([horizon.theta]),
                                           camera)[0])
@@ -715,7 +723,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
     threshold_line = end_line = (math.nan, math.nan)
     depth_span = d_near - d_far
     width, height = camera.width, camera.height
-    edges_reach_border = d_near >= bottom_depth - 3.0
+    edges_reach_border = d_near >= bottom_depth - params.border_clearance_px
     min_step = params.min_contrast
     width_slope = abs(pair.k_right - pair.k_left)
     # where the runway's surface ends (more reliable than where its edges fade)
@@ -731,14 +739,15 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         surface_level = extent.level
 
     def window(depth):
-        half = max(8.0, 0.5 * params.threshold_search_fraction * depth_span, 0.1 * depth)
+        half = max(params.threshold_window_min_px, 0.5 * params.threshold_search_fraction * depth_span,
+                   params.threshold_window_depth_fraction * depth)
         return max(0.5, depth - half), min(bottom_depth, depth + half)
 
     # the runway's surface running out of the bottom of the image hides the threshold: a step
     # found there would be a marking (the last second before the threshold)
     d_exit = _depth_leaving_image(horizon, s0_vp, 0.5 * (k_left_through_vp + k_right_through_vp), d_mid, bottom_depth,
                                   width, height)
-    if d_near_expected >= d_exit - 2.0:
+    if d_near_expected >= d_exit - params.threshold_exit_margin_px:
         near = None
         edges_reach_border = True
     else:
@@ -761,14 +770,17 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         # threshold, blast pad), the threshold is that marking
         d_pavement, pavement_step, moved = near.depth_px, near.step, None
         ground = ground_begins(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px,
-                               min(d_exit, near.depth_px + 0.5 * depth_span + 8.0), surface_level, min_step)
-        if ground is not None and ground[0] > near.depth_px + 3.0:
+                               min(d_exit, near.depth_px + params.pavement_search_fraction * depth_span
+                                   + params.pavement_search_px), surface_level, min_step)
+        if ground is not None and ground[0] > near.depth_px + params.pavement_min_move_px:
             d_ground, pavement_step = ground
             d_pavement = d_ground
             again = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
-                                         d_ground, (d_ground - 3.0, min(bottom_depth, d_ground + 3.0)), outward=1,
+                                         d_ground, (d_ground - params.pavement_window_px,
+                                                    min(bottom_depth, d_ground + params.pavement_window_px)), outward=1,
                                          min_step=min_step, colour=ctx.colour, surface_level=surface_level)
-            moved = again if again is not None and again.spans and abs(again.depth_px - d_ground) <= 2.0 else False
+            moved = (again if again is not None and again.spans
+                     and abs(again.depth_px - d_ground) <= params.pavement_agreement_px else False)
             if moved:
                 d_pavement, pavement_step = moved.depth_px, moved.step
         marking = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
@@ -822,11 +834,15 @@ def _confidence(params: DetectorParams, pair: _EdgePair, centre_fit: LineFit | N
     ``(None, reason)`` below ``params.min_confidence``."""
     fits = pair.fits
     q_support = math.sqrt(fits["left"].support * fits["right"].support)
-    q_residual = math.exp(-0.5 * (max(fits["left"].residual_px, fits["right"].residual_px) / 0.8) ** 2)
-    chi = abs(pair.s0_left - pair.s0_right) / max(pair.tolerance_px / 3.0, 1e-6)
-    q_vp = math.exp(-0.5 * (chi / 3.0) ** 2)
-    q_contrast = min(1.0, min(fits["left"].contrast, fits["right"].contrast) / (4.0 * params.min_contrast))
-    confidence = q_support * q_residual * q_vp * math.sqrt(q_contrast) * (1.0 if centre_fit is not None else 0.85)
+    q_residual = math.exp(-0.5 * (max(fits["left"].residual_px, fits["right"].residual_px)
+                                  / params.confidence_residual_px) ** 2)
+    # the crossings' separation in sigmas (the tolerance is edge_crossing_sigmas of them)
+    chi = abs(pair.s0_left - pair.s0_right) / max(pair.tolerance_px / params.edge_crossing_sigmas, 1e-6)
+    q_vp = math.exp(-0.5 * (chi / params.confidence_vp_sigmas) ** 2)
+    q_contrast = min(1.0, min(fits["left"].contrast, fits["right"].contrast)
+                     / (params.confidence_contrast_factor * params.min_contrast))
+    confidence = q_support * q_residual * q_vp * math.sqrt(q_contrast) * (
+        1.0 if centre_fit is not None else params.confidence_without_centre)
     if confidence < params.min_confidence:
         return None, (f"{_WEAK} (confidence {confidence:.2f} < {params.min_confidence:g}: "
                       f"support {q_support:.2f}, residual {q_residual:.2f}, horizon agreement {q_vp:.2f}, "
@@ -841,16 +857,18 @@ def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, 
     scale = math.sqrt(1 + k_centre * k_centre)
     d_ref = 0.5 * (d_far + d_near)
     t_lo, t_hi = (d_far - d_ref) * scale, (d_near - d_ref) * scale
-    img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, 8.0)
+    img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, params.centre_image_margin_px)
     t_lo, t_hi = max(t_lo, img_lo), min(t_hi, img_hi)
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi - t_lo < params.min_edge_length_px:
         return None
     width_near = abs(k_right - k_left) * d_near / scale
-    halfwidth = float(np.clip(0.08 * width_near, 3.0, params.search_halfwidth_px * 3))
+    halfwidth = float(np.clip(params.centre_band_fraction * width_near, params.centre_band_min_px,
+                              params.search_halfwidth_px * params.centre_band_max_factor))
 
     def stripe_width(t):
         depth = d_ref + np.asarray(t) / scale
-        return np.maximum(0.06 * np.abs(k_right - k_left) * depth / scale, 2.0)
+        return np.maximum(params.centre_width_fraction * np.abs(k_right - k_left) * depth / scale,
+                          params.centre_min_width_px)
 
     best = None
     for polarity in ((polarity_hint,) if polarity_hint else (1, -1)):
@@ -859,11 +877,11 @@ def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, 
                           iterations=max(1, params.refine_iterations - 1))
         if not fit or fit.residual_px > params.max_line_residual_px:
             continue
-        if (fit.extent[1] - fit.extent[0]) < params.min_edge_length_px or fit.support < 0.25:
+        if (fit.extent[1] - fit.extent[0]) < params.min_edge_length_px or fit.support < params.centre_min_support:
             continue
         if best is None or fit.n_inliers > best.n_inliers:
             best = fit
-        if best is not None and best.support >= 0.5:
+        if best is not None and best.support >= params.centre_bright_support:
             break            # a painted line is white: the dark try only if the bright one fails
     return best
 

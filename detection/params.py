@@ -75,6 +75,14 @@ NOT_SCALED_PX = (
     "crossing_min_sigma_px", "pencil_fit_min_sigma_px", "duplicate_gap_px", "pencil_step_halfspan_px",
     "pencil_join_tolerance_px", "refine_min_band_px", "max_line_residual_px", "reference_side_px",
     "reference_focal_px",
+    # the measurement's sub-pixel floors, blur and resolution limits (detector)
+    "edge_band_min_px", "edge_image_margin_px", "edge_blur_px", "chroma_resolved_stripe_px", "vp_line_min_sigma_px",
+    "centre_band_min_px", "centre_min_width_px", "confidence_residual_px",
+    # depth margins of the measurement (detector) kept at their 2048 px values at every size
+    # (not measured scaled yet): a change here moves results at other frame sizes
+    "ground_margin_px", "roi_min_side_px", "centre_image_margin_px", "threshold_window_min_px",
+    "border_clearance_px", "threshold_exit_margin_px", "pavement_search_px", "pavement_min_move_px",
+    "pavement_window_px", "pavement_agreement_px",
 )
 
 
@@ -309,6 +317,97 @@ class DetectorParams(ParamsFile):
         A runway being approached lies ahead: a pair of edges whose vanishing point says the
         runway's direction is more than this far from the aircraft's heading (a crossing
         taxiway or road) is not taken (the thesis's approaches start within 15 deg).
+    ground_margin_px : float
+        The ground searched is the part of the frame more than this below the horizon.
+    contrast_sample_step : int
+        The frame's contrast check reads every this-many-th pixel of the ground, each way.
+    contrast_percentiles : tuple of 2 float
+        The contrast is the spread between these percentiles of those grey levels (compared
+        with ``min_contrast``).
+    roi_min_side_px : float
+        A tracking region of interest narrower or shorter than this is not searched (the
+        previous runway is taken as out of view).
+    tracking_sigma_width_fraction : float
+        The prediction's one-sigma motion grows by this fraction of the runway's near width (px
+        per px), on top of ``tracking_sigma_px``.
+    edge_depth_inset_fraction : float
+        Each edge is refined between the surface's ends moved inwards by this fraction of their
+        depth span.
+    edge_surface_rows : int
+        Most rows read to find where a hypothesis's surface ends before its edges are refined.
+    edge_band_fraction, tracking_edge_band_fraction : float
+        The band searched across an edge is at most this fraction of the runway's local width
+        (acquisition, tracking a prediction that may have moved), so markings inside the
+        runway do not become the strongest step.
+    edge_band_min_px : float
+        ... and at least this half width.
+    tracking_refine_iterations : int
+        Refinement passes of a predicted edge (tracking).
+    edge_image_margin_px : float
+        An edge is sampled where it lies this far (plus ``search_halfwidth_px``) inside the image.
+    side_stripe_width_fraction : float
+        Widest painted side stripe looked past to the runway's boundary, fraction of the runway's
+        local width (ICAO: 0.9 m on runways 30 m and wider, 1.5 to 3 %).
+    edge_blur_px : float
+        Blur added to that stripe width, pixels.
+    chroma_retry_extent_fraction : float
+        In colour, an edge whose grey-level fit covers less than this fraction of its span is
+        refined again on the chroma.
+    chroma_resolved_stripe_px : float
+        A side stripe at least this wide (pixels) is resolved and the grey boundary kept;
+        narrower, the boundary is moved onto the chroma step (:func:`refine.chroma_boundary`).
+    prediction_gate_sigmas : float
+        Tracking: a refined edge more than this many prediction sigmas from its prediction is
+        not the runway tracked.
+    edge_crossing_sigmas : float
+        The edges (and the centre line) meet the horizon within ``vp_tolerance_px`` plus this
+        many of their crossings' combined sigma.
+    pair_min_overlap_fraction : float
+        The two edges must be seen over a common stretch of depth of at least this fraction of
+        the shorter one's (and ``min_edge_length_px``).
+    vp_line_min_sigma_px : float
+        Floor of a line's uncertainty at the horizon when the vanishing point is fused.
+    centre_band_fraction, centre_band_min_px, centre_band_max_factor : float
+        Half width of the band searched for the centre line: this fraction of the runway's near
+        width, between this many pixels and this many times ``search_halfwidth_px``.
+    centre_width_fraction, centre_min_width_px : float
+        Widest centre stripe expected: this fraction of the runway's local width, at least this
+        many pixels.
+    centre_image_margin_px : float
+        The centre line is sampled where it lies this far inside the image.
+    centre_min_support : float
+        A centre stripe held by a smaller fraction of its profiles is not the centre line.
+    centre_bright_support : float
+        A bright centre stripe this well supported ends the search (the dark one is tried only
+        when the bright one fails: painted lines are white).
+    threshold_window_min_px, threshold_window_depth_fraction : float
+        The threshold (runway end) is searched within the largest of this many pixels, half the
+        ``threshold_search_fraction`` of the edges' depth span, and this fraction of its
+        expected depth, of where the surface ends.
+    border_clearance_px : float
+        Edges supported to within this depth of the image bottom reach its border (a threshold
+        not found is then below the image).
+    threshold_exit_margin_px : float
+        A surface ending within this depth of where the runway leaves the image hides the
+        threshold: none is searched.
+    pavement_search_fraction, pavement_search_px : float
+        Where the ground begins before a threshold found is searched this fraction of the edges'
+        depth span plus this many pixels towards the camera.
+    pavement_min_move_px : float
+        The threshold moves to where the ground begins when that is more than this depth past
+        the step found.
+    pavement_window_px, pavement_agreement_px : float
+        The step is then searched again within this depth of where the ground begins and must
+        lie within the second of it.
+    confidence_residual_px : float
+        The confidence's straightness term is ``exp(-(r / this)^2 / 2)``, r the larger edge RMS
+        residual (pixels).
+    confidence_vp_sigmas : float
+        Its horizon-agreement term falls as the edges' crossings separate by this many sigmas.
+    confidence_contrast_factor : float
+        Its contrast term is full at this many times ``min_contrast``.
+    confidence_without_centre : float
+        Factor on the confidence when the centre line is not found.
     hold_s : float
         Over a sequence (:class:`visland.detection.DetectionSequence`): how long the last good
         detection keeps predicting the runway after frames where it was not found, before the
@@ -483,6 +582,48 @@ class DetectorParams(ParamsFile):
     min_confidence: float = 0.25
     horizon_margin_px: float = 0.0
     max_heading_deviation_deg: float = 40.0
+    # --- the measurement of a hypothesis (detector._measure and its steps)
+    ground_margin_px: float = 2.0
+    contrast_sample_step: int = 4
+    contrast_percentiles: tuple = (1.0, 99.0)
+    roi_min_side_px: float = 8.0
+    tracking_sigma_width_fraction: float = 0.05
+    edge_depth_inset_fraction: float = 0.03
+    edge_surface_rows: int = 300
+    edge_band_fraction: float = 0.05
+    tracking_edge_band_fraction: float = 0.15
+    edge_band_min_px: float = 2.0
+    tracking_refine_iterations: int = 1
+    edge_image_margin_px: float = 4.0
+    side_stripe_width_fraction: float = 0.04
+    edge_blur_px: float = 1.5
+    chroma_retry_extent_fraction: float = 0.5
+    chroma_resolved_stripe_px: float = 3.0
+    prediction_gate_sigmas: float = 2.5
+    edge_crossing_sigmas: float = 3.0
+    pair_min_overlap_fraction: float = 0.25
+    vp_line_min_sigma_px: float = 0.02
+    centre_band_fraction: float = 0.08
+    centre_band_min_px: float = 3.0
+    centre_band_max_factor: float = 3.0
+    centre_width_fraction: float = 0.06
+    centre_min_width_px: float = 2.0
+    centre_image_margin_px: float = 8.0
+    centre_min_support: float = 0.25
+    centre_bright_support: float = 0.5
+    threshold_window_min_px: float = 8.0
+    threshold_window_depth_fraction: float = 0.1
+    border_clearance_px: float = 3.0
+    threshold_exit_margin_px: float = 2.0
+    pavement_search_fraction: float = 0.5
+    pavement_search_px: float = 8.0
+    pavement_min_move_px: float = 3.0
+    pavement_window_px: float = 3.0
+    pavement_agreement_px: float = 2.0
+    confidence_residual_px: float = 0.8
+    confidence_vp_sigmas: float = 3.0
+    confidence_contrast_factor: float = 4.0
+    confidence_without_centre: float = 0.85
     # --- over a sequence (sequence)
     hold_s: float = 1.0
     max_edge_turn_rad: float = 0.05
@@ -560,6 +701,27 @@ class DetectorParams(ParamsFile):
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
         "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "min_confidence": (0.0, 1.0),
+        "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
+        "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
+        "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),
+        "edge_surface_rows": (8, 100000, "int"), "edge_band_fraction": (0.0, 10.0, "open"),
+        "tracking_edge_band_fraction": (0.0, 10.0, "open"), "edge_band_min_px": (0.5, 1000.0),
+        "tracking_refine_iterations": (1, 20, "int"), "edge_image_margin_px": (0.0, 1000.0),
+        "side_stripe_width_fraction": (0.0, 1.0), "edge_blur_px": (0.0, 100.0),
+        "chroma_retry_extent_fraction": (0.0, 1.0), "chroma_resolved_stripe_px": (0.0, 1000.0),
+        "prediction_gate_sigmas": (0.1, 100.0), "edge_crossing_sigmas": (0.1, 100.0),
+        "pair_min_overlap_fraction": (0.0, 1.0), "vp_line_min_sigma_px": (0.001, 100.0),
+        "centre_band_fraction": (0.0, 1.0), "centre_band_min_px": (0.5, 1000.0),
+        "centre_band_max_factor": (1.0, 100.0), "centre_width_fraction": (0.0, 1.0),
+        "centre_min_width_px": (0.5, 1000.0), "centre_image_margin_px": (0.0, 1000.0),
+        "centre_min_support": (0.0, 1.0), "centre_bright_support": (0.0, 1.0),
+        "threshold_window_min_px": (0.0, 10000.0), "threshold_window_depth_fraction": (0.0, 10.0),
+        "border_clearance_px": (0.0, 1000.0), "threshold_exit_margin_px": (0.0, 1000.0),
+        "pavement_search_fraction": (0.0, 10.0), "pavement_search_px": (0.0, 10000.0),
+        "pavement_min_move_px": (0.0, 1000.0), "pavement_window_px": (0.5, 1000.0),
+        "pavement_agreement_px": (0.0, 1000.0), "confidence_residual_px": (0.01, 100.0),
+        "confidence_vp_sigmas": (0.1, 100.0), "confidence_contrast_factor": (0.1, 1000.0),
+        "confidence_without_centre": (0.0, 1.0),
         "horizon_margin_px": (0.0, 100000.0), "hold_s": (0.0, 60.0), "max_heading_deviation_deg": (1.0, 90.0), "max_edge_turn_rad": (0.0, 3.2),
         "max_edge_turn_rate_rps": (0.0, 100.0), "max_vp_jump_px": (0.0, 100000.0),
         "max_vp_jump_rate_pxps": (0.0, 1e6), "max_threshold_jump_px": (0.0, 100000.0),
