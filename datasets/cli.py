@@ -104,9 +104,11 @@ def _cmd_fly(args) -> int:
                          truth_guided=args.truth_guided, flare_height_source=args.flare_height_source,
                          initial_height_m=args.initial_height, seed=args.seed,
                          calibration_error_deg=(0.0, args.pitch_mount_error, 0.0),
-                         detection_lost_below_ft=args.lose_runway_below, frozen_frames_at_ft=args.freeze_at)
+                         detection_lost_below_ft=args.lose_runway_below, frozen_frames_at_ft=args.freeze_at,
+                         fps=args.fps)
     if args.monte_carlo:
-        summary = monte_carlo(args.monte_carlo, options, args.out, echo=print)
+        sources = args.sources.split(",") if args.sources else None
+        summary = monte_carlo(args.monte_carlo, options, args.out, echo=print, sources=sources)
         print(json.dumps(json_ready(summary)))
         return 0
     result = fly(resolve_scenario(args.scenario), options)
@@ -156,6 +158,11 @@ def register(subparsers):
     p.add_argument("--monte-carlo", type=int, default=0, metavar="N",
                    help="fly N cases (thesis-1..8 and ecc-1..3 in turn, crosswind 0-15 kt, gusts, noise seeds), "
                         "each on the estimates and on the truth; writes --out DIR/landings.csv and a plot")
+    p.add_argument("--sources", default=None, metavar="LIST",
+                   help="--monte-carlo: what each case is flown on, comma-separated among detection, simulated, "
+                        "truth (default: --measure, simulated when that is not it, and truth)")
+    p.add_argument("--fps", type=float, default=25.0, metavar="HZ",
+                   help="camera frame rate, a divisor of the 50 Hz flight rate (25, 12.5, 10...; default 25)")
     p.add_argument("--out", default="visland-fly", metavar="DIR", help="output folder of --monte-carlo")
     p.set_defaults(func=_cmd_fly)
 

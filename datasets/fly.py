@@ -63,13 +63,41 @@ class MonitorParams:
     steps), is the "depth flow" ``F``: a 1 px measurement resolves the height to about ``1 / F``.
     The decision asks ``F >= min_depth_flow_px`` (20 px: about 5 %); the window's median ``O``
     is reported too.
+
+    Agreement. Two observers on the same frames that are each right differ by no more than
+    their errors allow: with ``e_p`` and ``e_l`` the expected (RMS) relative dH errors of the
+    point and the line observer at that height, their difference has a standard deviation of
+    ``dH sqrt(e_p^2 + e_l^2)`` (independent errors: different features, different models), and
+    the rule asks ``|dH_p - dH_l| <= agreement_sigmas dH sqrt(e_p^2 + e_l^2)``, dH the smaller of
+    the two (a wrong high estimate must not widen its own tolerance). ``expected_dh_error``
+    gives ``(height ft, e_p, e_l)``, the entry nearest the decision height applying. The defaults
+    are what kf-2p and ekf-2l reached on rendered 512 px frames with detection (thesis-1/2/3 of
+    the Monte Carlo, 3-4 flights, truth - estimate over dH): kf-2p 1.3 % RMS at 200 ft (largest
+    1.9 %), 1.0 % at 100 ft (1.7 %); ekf-2l 2.6 % at 200 ft (4.3 %), 1.2 % at 100 ft (1.6 %),
+    rounded up to 1.5/3 % and 1/1.5 %: 3 sigma is 10 % of dH at 200 ft (6.1 m) and 5.4 % at
+    100 ft (1.6 m). The filters' own covariances are not used: on those flights they were
+    2.5-10 times too small (ekf-2l's dH 2.6 m off at 200 ft with sigma 0.25 m). The former
+    limit, 3 m or 5 % of dH at both heights, was 1.5 sigma of the expected gap at 200 ft (one
+    nominal approach in seven sent around by it) and 5.5 sigma at 100 ft (a 3 m height error let
+    through where the flare is 15 m away).
+
+    Start. The measurements reach the heading estimate and the observers only once the detection
+    passes the same test as at a decision height over a full window (found in ``min_found_fraction``
+    of the last ``window_s``, median confidence ``min_confidence``), on a found frame; until then
+    the aircraft flies wings level in level flight. Far out a runway a few pixels wide is found
+    in one frame of two or fewer, and those first detections are the least reliable: on
+    thesis-2-mc1 at 512 px (5.7 km, runway 5 px wide) the first acquisition took a parallel
+    object 21 px to the side, and kf-2p, started on it, was sent to dH 1900-2500 m and rejected
+    every later measurement; from the first full second with the runway found in 80 % of the
+    frames (8 s later, 5.4 km) every found corner was within 1.3 px of the exact one.
     """
 
     decision_heights_ft: tuple = (400.0, 200.0, 100.0)
     window_s: float = 1.0                 # how far back detection and observability are judged
     min_found_fraction: float = 0.8       # of the frames in the window
     min_confidence: float = 0.5           # median confidence of the found frames in the window
-    max_dh_disagreement_m: float = 3.0    # |dH points - dH lines|, or 5 % of dH if larger
+    agreement_sigmas: float = 3.0         # |dH points - dH lines| within this many of its expected standard deviation
+    expected_dh_error: tuple = ((200.0, 0.015, 0.030), (100.0, 0.010, 0.015))   # (ft, points, lines): RMS dH error / dH
     max_dy_disagreement_m: float = 3.0    # |dY points - dY lines|
     max_coast_s: float = 0.5              # the guidance observer's time since its last correction
     min_depth_flow_px: float = 20.0       # accumulated corner motion due to the translation (see above)
@@ -260,6 +288,20 @@ class _Tracked:
         self.depth_flow_px = 0.0           # fx * integral of sqrt(O) / dH over corrected steps (MonitorParams)
         self._last_yv = None
 
+    def dh_sigma_m(self) -> float:
+        """The observer's own standard deviation of dH (metres) from its covariance, NaN for an
+        observer without one: kf-2p's ``P[Z, Z]``; ekf-2l's ``P[eta, eta]`` carried to
+        ``dH = 1 / eta`` (``sigma_dH = sigma_eta / eta^2``, first order)."""
+        obs = self.observer
+        if not self.started:
+            return math.nan
+        if hasattr(obs, "_kf"):
+            return math.sqrt(max(float(obs._kf.P[3, 3]), 0.0))
+        if hasattr(obs, "_ekf"):
+            eta = float(obs._ekf.x[4, 0]) if obs._ekf.x.ndim == 2 else float(obs._ekf.x[4])
+            return math.sqrt(max(float(obs._ekf.P[4, 4]), 0.0)) / (eta * eta) if eta > 0 else math.nan
+        return math.nan
+
     def step(self, inp, dh0_m):
         from visland.estimation.deviations import deviations_from_lines, deviations_from_points
         obs = self.observer
@@ -372,6 +414,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
     measure_s = estimate_s = 0.0
     frozen_image = None
     frozen_until = None
+    trusted_from = None       # where the measurements were first trusted (MonitorParams, "Start")
     k = 0
     max_steps = int(400 * 50)
     while k < max_steps:
@@ -408,7 +451,13 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
             frames_log.append((t, row["found"] > 0.5, row["confidence"]))
             trace.append((round(t, 2), round(h_true, 2), int(row["found"] > 0.5), _r(row["confidence"]),
                           _r(guide_obs.dh_m), _r(guide_obs.dy_m)))
-            features = prep.frame(row, state.roll_rad, state.pitch_rad, state.heading_rad)
+            if trusted_from is None and _measurements_trusted(options.monitor, frames_log, t):
+                trusted_from = {"t_s": round(t, 3), "dx_m": round(float(state.p_runway_m[0]) - aim, 1),
+                                "dh_m": round(h_true, 1)}
+            # nothing reaches the heading estimate or the observers before the detection is
+            # trusted (MonitorParams, "Start")
+            features = prep.frame(row if trusted_from is not None else _empty_row(t), state.roll_rad,
+                                  state.pitch_rad, state.heading_rad)
         tic = time.perf_counter()
         inp = prep.step(t, state.roll_rad, state.pitch_rad, state.heading_rad, state.omega_body_rps,
                         state.v_ned_mps, features)
@@ -448,7 +497,9 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
                               "coast_s": _r(t - guide_obs.last_correction_s),
                               "dh_true_m": round(h_true, 3), "dy_true_m": round(float(state.p_runway_m[1]), 3),
                               "dh_points_m": _r(guide_obs.dh_m), "dy_points_m": _r(guide_obs.dy_m),
-                              "dh_lines_m": _r(monitor_obs.dh_m), "dy_lines_m": _r(monitor_obs.dy_m)})
+                              "dh_lines_m": _r(monitor_obs.dh_m), "dy_lines_m": _r(monitor_obs.dy_m),
+                              "dh_sigma_points_m": _r(guide_obs.dh_sigma_m()),
+                              "dh_sigma_lines_m": _r(monitor_obs.dh_sigma_m())})
             if not ok and options.truth_guided:
                 # the baseline lands whatever the estimators say: the decision is recorded, not flown
                 monitor_would_go_around = monitor_would_go_around or f"{h_ft:g} ft: {why}"
@@ -495,6 +546,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
         "dh_err_100ft_m": dh_err_100 if math.isfinite(dh_err_100) else None,
         "decisions": decisions, "deviations": deviations_at,
         "in_window": bool(gear is not None and 60.0 <= gear[0] <= 823.0 and abs(gear[1]) <= runway.width_m / 2),
+        "measurements_trusted_from": trusted_from,
         "frames": len(frames_log), "measure_s": round(measure_s, 3), "estimate_s": round(estimate_s, 3),
         "envelope": envelope_report,
         "trace": {"columns": ["t_s", "dh_true_m", "found", "confidence", "dh_m", "dy_m"], "rows": trace},
@@ -599,9 +651,10 @@ def _recent_observability(tracked, t, window_s):
     return float(np.median(values)) if values else math.nan
 
 
-def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true, h_ft=200.0):
-    """(continue?, reason): the rule of :class:`MonitorParams`."""
-    m = options.monitor
+def _detection_test(m, frames_log, t):
+    """(passed?, reason): the runway found in at least ``m.min_found_fraction`` of the frames of
+    the last ``m.window_s`` with a median confidence of at least ``m.min_confidence`` (passed when
+    no frame is in the window)."""
     recent = [(found, conf) for (tf, found, conf) in frames_log if t - tf <= m.window_s + 1e-9]
     if recent:
         found_fraction = sum(f for f, _ in recent) / len(recent)
@@ -610,6 +663,31 @@ def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true, h_ft=200.0)
         confidences = [c for f, c in recent if f]
         if confidences and float(np.median(confidences)) < m.min_confidence:
             return False, f"detection confidence {float(np.median(confidences)):.2f} < {m.min_confidence:g}"
+    return True, ""
+
+
+def _measurements_trusted(m, frames_log, t) -> bool:
+    """Whether the observers may start on the detections (:class:`MonitorParams`, "Start"): a
+    full window of frames behind ``t`` that passes :func:`_detection_test`, and the frame at
+    ``t`` found."""
+    if not frames_log or not frames_log[-1][1] or t - frames_log[0][0] < m.window_s - 1e-9:
+        return False
+    return _detection_test(m, frames_log, t)[0]
+
+
+def _dh_agreement_limit_m(m, h_ft, dh_points_m, dh_lines_m) -> float:
+    """The largest |dH points - dH lines| that passes at decision height ``h_ft``
+    (:class:`MonitorParams`, "Agreement")."""
+    _, e_points, e_lines = min(m.expected_dh_error, key=lambda entry: abs(entry[0] - h_ft))
+    return m.agreement_sigmas * min(dh_points_m, dh_lines_m) * math.hypot(e_points, e_lines)
+
+
+def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true, h_ft=200.0):
+    """(continue?, reason): the rule of :class:`MonitorParams`."""
+    m = options.monitor
+    ok, why = _detection_test(m, frames_log, t)
+    if not ok:
+        return False, why
     if not guide_obs.started or not math.isfinite(guide_obs.dx_m):
         return False, f"no estimate from {guide_obs.observer.name}"
     if t - guide_obs.last_correction_s > m.max_coast_s:
@@ -620,7 +698,7 @@ def _monitor(options, frames_log, t, guide_obs, monitor_obs, h_true, h_ft=200.0)
                        f"(< {m.min_depth_flow_px:g} px, a height resolved to worse than "
                        f"{100.0 / max(m.min_depth_flow_px, 1e-9):.0f} %)")
     if h_ft < m.agreement_below_ft and monitor_obs.started and math.isfinite(monitor_obs.dh_m):
-        limit = max(m.max_dh_disagreement_m, 0.05 * guide_obs.dh_m)
+        limit = _dh_agreement_limit_m(m, h_ft, guide_obs.dh_m, monitor_obs.dh_m)
         gap = abs(guide_obs.dh_m - monitor_obs.dh_m)
         if gap > limit:
             return False, (f"dH of {guide_obs.observer.name} and {monitor_obs.observer.name} differ by {gap:.1f} m "
@@ -651,11 +729,23 @@ def monte_carlo_cases(n: int, seed: int = 0):
     return cases
 
 
-def guidance_sources(options: FlyOptions) -> tuple:
-    """What each Monte Carlo case is flown on: ``options.measure`` (the estimates on detected or
-    simulated features), the ideal-measurement loop (exact features + pixel noise) when that is
-    not already the first, and the truth (the baseline)."""
-    return (options.measure,) + (("simulated",) if options.measure != "simulated" else ()) + ("truth",)
+GUIDANCE_SOURCES = MEASURE_MODES + ("truth",)
+
+
+def guidance_sources(options: FlyOptions, sources=None) -> tuple:
+    """What each Monte Carlo case is flown on: by default ``options.measure`` (the estimates on
+    detected or simulated features), the ideal-measurement loop (exact features + pixel noise)
+    when that is not already the first, and the truth (the baseline); or ``sources``, a subset
+    of :data:`GUIDANCE_SOURCES` (e.g. ``("detection", "truth")``: the ideal-feature loop is a
+    third of a rendered-frame campaign's time and none of its must-show figures)."""
+    if sources is None:
+        return (options.measure,) + (("simulated",) if options.measure != "simulated" else ()) + ("truth",)
+    sources = tuple(dict.fromkeys(sources))
+    unknown = [s for s in sources if s not in GUIDANCE_SOURCES]
+    if unknown or not sources:
+        raise ValueError(f"--sources must name one or more of {', '.join(GUIDANCE_SOURCES)}, got "
+                         f"{','.join(sources) or 'nothing'}")
+    return sources
 
 
 def _options_for(options: FlyOptions, source: str, seed: int) -> FlyOptions:
@@ -665,9 +755,9 @@ def _options_for(options: FlyOptions, source: str, seed: int) -> FlyOptions:
     return replace(options, truth_guided=False, measure=source, seed=seed)
 
 
-def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print) -> dict:
-    """Fly ``n`` cases on each of :func:`guidance_sources`; write ``landings.csv`` and
-    ``touchdowns.png`` into ``out_dir``; return the summary (the JSON line).
+def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print, sources=None) -> dict:
+    """Fly ``n`` cases on each of :func:`guidance_sources` (``sources``: see there); write
+    ``landings.csv`` and ``touchdowns.png`` into ``out_dir``; return the summary (the JSON line).
 
     Each flight's JSON is kept in ``out_dir/runs/`` (written atomically) and not flown again when
     the command is re-run: a campaign stopped part-way resumes where it stopped."""
@@ -679,9 +769,11 @@ def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print) -> dict:
     out = Path(out_dir)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     rows = []
+    flown_on = guidance_sources(options, sources)
+    rate = "" if options.fps == 25.0 else f"-{options.fps:g}hz"      # the camera rate, when not the default
     for scenario, seed in monte_carlo_cases(n, options.seed):
-        for source in guidance_sources(options):
-            tag = f"{source}-{options.size}px" if source == "detection" else source
+        for source in flown_on:
+            tag = (f"{source}-{options.size}px" if source == "detection" else source) + (rate if source != "truth" else "")
             path = out / "runs" / f"{scenario.name}-{tag}.json"
             if path.exists():
                 r = json.loads(path.read_text())

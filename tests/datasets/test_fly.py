@@ -98,10 +98,49 @@ def test_monitor_goes_around_on_a_weakly_observable_height_and_judges_agreement_
     assert _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, 80.0), lines, 121.9, 400.0) == \
         (True, "estimates consistent")                    # 400 ft: the line observer is not judged
     ok, why = _monitor(options, frames, 10.0, _FakeTracked(120.0, 0.0, 80.0), lines, 121.9, 200.0)
-    assert not ok and "differ by 40.0 m (> 6.0 m)" in why  # lower: 3 m or 5 % of dH
+    assert not ok and "differ by 40.0 m (> 12.1 m)" in why  # lower: 3 sigma, 3.35 % of the smaller dH at 200 ft
     sparse = [(tf, i % 5 == 0, 0.9) for i, (tf, _, _) in enumerate(frames)]
     ok, why = _monitor(options, sparse, 10.0, _FakeTracked(120.0, 0.0, 80.0), no_lines, 121.9, 400.0)
     assert not ok and why.startswith("runway found in 23% of the frames")     # 6 of 26
+
+
+def test_measurements_are_trusted_after_a_full_window_found_in_80_percent_of_the_frames():
+    """The start gate (MonitorParams, "Start") on hand-made frame logs at 25 Hz."""
+    from visland.datasets.fly import _measurements_trusted
+    m = FlyOptions().monitor
+    every = [(0.04 * i, True, 0.9) for i in range(26)]                       # 0 .. 1.0 s, all found
+    assert _measurements_trusted(m, every, 1.0)
+    assert not _measurements_trusted(m, every[:25], 0.96)                   # the window is not full yet
+    far = [(0.04 * i, i % 2 == 0, 0.9) for i in range(26)]                  # found in one frame of two
+    assert not _measurements_trusted(m, far, 1.0)
+    faint = [(tf, True, 0.3) for tf, _, _ in every]                         # found, median confidence 0.3
+    assert not _measurements_trusted(m, faint, 1.0)
+    last_missed = every[:-1] + [(1.0, False, 0.0)]                           # 96 % found, but not this frame
+    assert not _measurements_trusted(m, last_missed, 1.0)
+    mostly = [(0.04 * i, i % 6 != 2, 0.9) for i in range(26)]               # 22 of 26 (85 %) found
+    assert _measurements_trusted(m, mostly, 1.0)
+
+
+def test_no_estimate_before_the_measurements_are_trusted(landings):
+    """Exact features are found in every frame: trusted from the first full window (1 s), and the
+    observers' estimates in the per-frame trace start there, not before."""
+    run = landings[False]
+    start = run["measurements_trusted_from"]
+    assert start["t_s"] == pytest.approx(1.0)
+    rows = run["trace"]["rows"]                      # t, true height, found, confidence, dH, dY (before the frame)
+    assert all(r[4] is None for r in rows if r[0] <= 1.0 + 1e-9)
+    assert all(r[4] is not None for r in rows if r[0] >= 1.6)       # the runway heading settles on 10 samples
+
+
+def test_dh_agreement_limit_is_three_sigma_of_the_expected_gap_and_not_widened_by_a_high_estimate():
+    """3 sqrt(1.5 %^2 + 3 %^2) = 10.06 % of dH at 200 ft, 3 sqrt(1 %^2 + 1.5 %^2) = 5.41 % at 100 ft."""
+    from visland.datasets.fly import _dh_agreement_limit_m
+    m = FlyOptions().monitor
+    assert _dh_agreement_limit_m(m, 200.0, 60.96, 61.5) == pytest.approx(60.96 * 3 * math.sqrt(0.015 ** 2 + 0.03 ** 2))
+    assert _dh_agreement_limit_m(m, 100.0, 30.6, 30.48) == pytest.approx(30.48 * 3 * math.sqrt(0.01 ** 2 + 0.015 ** 2))
+    assert _dh_agreement_limit_m(m, 200.0, 2400.0, 60.0) == _dh_agreement_limit_m(m, 200.0, 60.0, 2400.0) \
+        == pytest.approx(60.0 * 0.1006, rel=1e-3)
+    assert _dh_agreement_limit_m(m, 50.0, 15.0, 15.0) == pytest.approx(15.0 * 0.0541, rel=1e-3)   # nearest: 100 ft
 
 
 def test_depth_flow_is_the_corner_motion_due_to_the_translation():

@@ -74,3 +74,37 @@ def test_bench_render_prints_its_figures_as_the_last_json_line(capsys):
     assert data["bench"] == "render" and data["size_px"] == 64
     assert data["render"]["median_s"] == figures["render"]["median_s"] > 0
     assert "1" in data["png_levels"]
+
+
+def test_uniforms_held_by_a_program_are_not_sent_again_and_the_frames_are_the_same_bytes(monkeypatch):
+    """glview._cache_uniforms skips a uniform value the program already holds: the frames of a
+    short sequence (two poses, each drawn twice, interleaved) are byte-identical to pyrender's
+    own every-uniform-every-primitive path, and fewer uniforms reach the driver."""
+    import visland.render.glview as glview
+    camera = CameraModel.default(96)
+    poses = [_pose(3000.0, 160.0, camera), _pose(800.0, 45.0, camera)] * 2
+
+    def frames():
+        sent = []
+        with FrameRenderer(SceneParams(distractors=False), camera, Runway()) as renderer:
+            images = []
+            for k, (p, R) in enumerate(poses):
+                images.append(renderer.render(p, R, frame_seed=k))
+            for program in renderer._view._offscreen._renderer._program_cache._program_cache.values():
+                sent.append(getattr(program, "_visland_sent", 0))
+        return images, sum(sent)
+
+    import pyrender.shader_program as shader_program
+    original = shader_program.ShaderProgram.set_uniform
+
+    def counting(self, name, value, unsigned=False):
+        self._visland_sent = getattr(self, "_visland_sent", 0) + 1
+        return original(self, name, value, unsigned)
+
+    monkeypatch.setattr(shader_program.ShaderProgram, "set_uniform", counting)
+    cached, sent_cached = frames()
+    monkeypatch.setattr(glview, "_cache_uniforms", lambda program: setattr(program, "_visland_uniforms", {}))
+    every, sent_every = frames()
+    assert all(np.array_equal(a, b) for a, b in zip(cached, every))
+    assert not np.array_equal(cached[0], cached[1])                 # two different poses
+    assert 0 < sent_cached < sent_every / 2
