@@ -729,7 +729,7 @@ def monte_carlo_cases(n: int, seed: int = 0):
     return cases
 
 
-GUIDANCE_SOURCES = MEASURE_MODES + ("truth",)
+GUIDANCE_SOURCES = ("detection", "simulated", "truth")
 
 
 def guidance_sources(options: FlyOptions, sources=None) -> tuple:

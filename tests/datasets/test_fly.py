@@ -239,6 +239,28 @@ def test_monte_carlo_flies_each_case_on_detection_ideal_features_and_truth_and_r
     assert calls == [] and again["detection"] == det                     # resumed from the runs' JSON
 
 
+def test_monte_carlo_flies_only_the_sources_asked_and_names_runs_by_camera_rate(tmp_path, monkeypatch):
+    import visland.datasets.fly as fly_module
+    calls = []
+
+    def fake_fly(scenario, options):
+        calls.append((scenario.name, "truth" if options.truth_guided else options.measure, options.fps))
+        return {"touchdown_x_m": 510.0, "touchdown_y_m": 0.0, "sink_rate_mps": 0.8, "go_around": False,
+                "go_around_reason": "", "dh_err_100ft_m": 0.1, "decisions": [], "deviations": {},
+                "frames": 100, "measure_s": 1.0, "estimate_s": 0.5, "wall_s": 2.0}
+
+    monkeypatch.setattr(fly_module, "fly", fake_fly)
+    monkeypatch.setattr(fly_module, "_plot_touchdowns", lambda rows, path: None)
+    options = FlyOptions(measure="detection", size=256, fps=10.0)
+    summary = fly_module.monte_carlo(1, options, tmp_path, echo=lambda *_: None, sources=("detection", "truth"))
+    assert calls == [("thesis-1-mc0", "detection", 10.0), ("thesis-1-mc0", "truth", 10.0)]
+    assert set(summary) >= {"detection", "truth"} and "simulated" not in summary
+    assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == ["thesis-1-mc0-detection-256px-10hz.json",
+                                                                      "thesis-1-mc0-truth.json"]
+    with pytest.raises(ValueError, match="--sources must name one or more of detection, simulated, truth"):
+        fly_module.monte_carlo(1, options, tmp_path, echo=lambda *_: None, sources=("radar",))
+
+
 @pytest.mark.slow
 def test_a_straight_in_glide_path_start_is_weakly_observable_at_400_ft():
     """Started on the glide path 3 km out with the height 20 % high, nothing but the slow
