@@ -84,7 +84,7 @@ class MonitorParams:
     Start. The measurements reach the heading estimate and the observers only once the detection
     passes the same test as at a decision height over a full window (found in ``min_found_fraction``
     of the last ``window_s``, median confidence ``min_confidence``), on a found frame; until then
-    the aircraft flies wings level in level flight. Far out a runway a few pixels wide is found
+    the aircraft flies wings level at the vertical speed it started with. Far out a runway a few pixels wide is found
     in one frame of two or fewer, and those first detections are the least reliable: on
     thesis-2-mc1 at 512 px (5.7 km, runway 5 px wide) the first acquisition took a parallel
     object 21 px to the side, and kf-2p, started on it, was sent to dH 1900-2500 m and rejected
@@ -415,6 +415,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
     frozen_image = None
     frozen_until = None
     trusted_from = None       # where the measurements were first trusted (MonitorParams, "Start")
+    hdot_start_mps = -float(model.current().v_ned_mps[2])
     k = 0
     max_steps = int(400 * 50)
     while k < max_steps:
@@ -511,7 +512,8 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
         if go_around:
             orders = model.go_around_orders()
         elif p_seen is None:
-            orders = (0.0, model._vertical_orders(0.0))      # no estimate yet: wings level, level flight
+            # no estimate yet: wings level, the vertical speed the approach started with held
+            orders = (0.0, model._vertical_orders(hdot_start_mps))
         else:
             bank, nz = model.guidance_orders(p_seen, v_seen)
             flare_h = _flare_height(options, dh_seen, gear_h, h_true, model, rng)
