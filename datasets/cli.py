@@ -108,7 +108,8 @@ def _cmd_fly(args) -> int:
                          fps=args.fps)
     if args.monte_carlo:
         sources = args.sources.split(",") if args.sources else None
-        summary = monte_carlo(args.monte_carlo, options, args.out, echo=print, sources=sources)
+        summary = monte_carlo(args.monte_carlo, options, args.out, echo=print, sources=sources,
+                              scheduler=args.scheduler)
         print(json.dumps(json_ready(summary)))
         return 0
     result = fly(resolve_scenario(args.scenario), options)
@@ -161,6 +162,9 @@ def register(subparsers):
     p.add_argument("--sources", default=None, metavar="LIST",
                    help="--monte-carlo: what each case is flown on, comma-separated among detection, simulated, "
                         "truth (default: --measure, simulated when that is not it, and truth)")
+    p.add_argument("--scheduler", default=None, metavar="ADDR",
+                   help="--monte-carlo: a Dask scheduler address (tcp://host:port); each flight not yet flown is one "
+                        "task on that cluster")
     p.add_argument("--fps", type=float, default=25.0, metavar="HZ",
                    help="camera frame rate, a divisor of the 50 Hz flight rate (25, 12.5, 10...; default 25)")
     p.add_argument("--out", default="visland-fly", metavar="DIR", help="output folder of --monte-carlo")

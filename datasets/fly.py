@@ -757,39 +757,85 @@ def _options_for(options: FlyOptions, source: str, seed: int) -> FlyOptions:
     return replace(options, truth_guided=False, measure=source, seed=seed)
 
 
-def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print, sources=None) -> dict:
+def fly_and_keep(scenario, options: FlyOptions, path, cv_threads: dict | None = None) -> dict:
+    """Fly one Monte Carlo flight and write its JSON to ``path`` atomically (module level, so
+    that a Dask worker can run it); return it. ``cv_threads``: on Dask, worker address ->
+    OpenCV threads (:func:`visland.datasets.batch.opencv_threads_per_worker`)."""
+    import json
+    from visland.contracts import atomic_write_text, json_ready
+    if cv_threads:
+        import cv2
+        from dask.distributed import get_worker
+        cv2.setNumThreads(cv_threads.get(get_worker().address, 0))
+    r = json_ready(fly(scenario, options))
+    atomic_write_text(path, json.dumps(r) + "\n")
+    return r
+
+
+def _fly_on_cluster(pending, scheduler: str, echo) -> None:
+    """Fly ``pending`` ``(scenario, options, path)`` flights as one Dask task each on the cluster
+    at ``scheduler``; each writes its own JSON (:func:`fly_and_keep`)."""
+    import os
+    from dask.distributed import Client, as_completed
+    from visland.datasets.batch import opencv_threads_per_worker
+    try:
+        client = Client(scheduler, timeout=10, set_as_default=False)
+    except (OSError, TimeoutError) as error:
+        raise ValueError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({error})") from None
+    with client:
+        shares = opencv_threads_per_worker(client.scheduler_info()["workers"], client.run(os.cpu_count))
+        echo(f"monte carlo: {len(pending)} flights on the Dask cluster at {scheduler}")
+        futures = {client.submit(fly_and_keep, scenario, options, str(path), shares, pure=False): path
+                   for scenario, options, path in pending}
+        for future in as_completed(list(futures), loop=client.loop):
+            r = future.result()
+            echo(f"{futures[future].name}: flown on the cluster ({r['wall_s']:.0f} s)")
+
+
+def monte_carlo(n: int, options: FlyOptions, out_dir, echo=print, sources=None, scheduler: str | None = None) -> dict:
     """Fly ``n`` cases on each of :func:`guidance_sources` (``sources``: see there); write
     ``landings.csv`` and ``touchdowns.png`` into ``out_dir``; return the summary (the JSON line).
 
     Each flight's JSON is kept in ``out_dir/runs/`` (written atomically) and not flown again when
-    the command is re-run: a campaign stopped part-way resumes where it stopped."""
+    the command is re-run: a campaign stopped part-way resumes where it stopped. ``scheduler``:
+    a Dask scheduler address; the flights not yet flown are one task each on that cluster. The
+    summary's ``flown`` and ``campaign_wall_s`` are the flights flown by this call and its wall
+    time (the throughput)."""
     import json
     from pathlib import Path
-    from visland.contracts import atomic_write_text, json_ready, write_csv
+    from visland.contracts import write_csv
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise ValueError(f"--monte-carlo must be a positive number of cases, got {n!r}")
+    wall0 = time.perf_counter()
     out = Path(out_dir)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     rows = []
     flown_on = guidance_sources(options, sources)
     rate = "" if options.fps == 25.0 else f"-{options.fps:g}hz"      # the camera rate, when not the default
+    flights = []
     for scenario, seed in monte_carlo_cases(n, options.seed):
         for source in flown_on:
             tag = (f"{source}-{options.size}px" if source == "detection" else source) + (rate if source != "truth" else "")
-            path = out / "runs" / f"{scenario.name}-{tag}.json"
-            if path.exists():
-                r = json.loads(path.read_text())
-            else:
-                r = json_ready(fly(scenario, _options_for(options, source, seed)))
-                atomic_write_text(path, json.dumps(r) + "\n")
-            rows.append(_landing_row(scenario, source, r))
-            echo(f"{scenario.name} {source}: " + (
-                f"go-around ({r['go_around_reason']})" if r["go_around"] else
-                f"touchdown x {r['touchdown_x_m']:.0f} m, y {r['touchdown_y_m']:+.2f} m, sink {r['sink_rate_mps']:.2f} m/s"
-                if r["touchdown_x_m"] is not None else "no touchdown") + f" ({r['wall_s']:.0f} s)")
-            columns = {k: [row[k] if row[k] is not None else math.nan for row in rows] for k in rows[0]}
-            write_csv(out / "landings.csv", columns, list(rows[0]))
+            flights.append((scenario, source, _options_for(options, source, seed),
+                            out / "runs" / f"{scenario.name}-{tag}.json"))
+    flown = [path for _, _, _, path in flights if not path.exists()]
+    if scheduler is not None and flown:
+        _fly_on_cluster([(scenario, o, path) for scenario, _, o, path in flights if not path.exists()], scheduler, echo)
+    for scenario, source, flight_options, path in flights:
+        if path.exists():
+            r = json.loads(path.read_text())
+        else:
+            r = fly_and_keep(scenario, flight_options, path)
+        rows.append(_landing_row(scenario, source, r))
+        echo(f"{scenario.name} {source}: " + (
+            f"go-around ({r['go_around_reason']})" if r["go_around"] else
+            f"touchdown x {r['touchdown_x_m']:.0f} m, y {r['touchdown_y_m']:+.2f} m, sink {r['sink_rate_mps']:.2f} m/s"
+            if r["touchdown_x_m"] is not None else "no touchdown") + f" ({r['wall_s']:.0f} s)")
+        columns = {k: [row[k] if row[k] is not None else math.nan for row in rows] for k in rows[0]}
+        write_csv(out / "landings.csv", columns, list(rows[0]))
     summary = _monte_carlo_summary(rows)
+    summary["flown"] = len(flown)
+    summary["campaign_wall_s"] = round(time.perf_counter() - wall0, 1)
     _plot_touchdowns(rows, out / "touchdowns.png")
     summary["landings_csv"] = str(out / "landings.csv")
     summary["plot"] = str(out / "touchdowns.png")

@@ -262,6 +262,30 @@ def test_monte_carlo_flies_only_the_sources_asked_and_names_runs_by_camera_rate(
 
 
 @pytest.mark.slow
+def test_monte_carlo_on_a_dask_cluster_gives_the_flights_of_the_serial_campaign(tmp_path):
+    """Two short truth-guided flights (simulated features, 256 px) as Dask tasks on a local
+    cluster of two worker processes: the same landings as flown one after the other here."""
+    distributed = pytest.importorskip("dask.distributed")
+    import visland.datasets.fly as fly_module
+    options = FlyOptions(size=256, fps=10.0)
+    short = [(_short(), 3), (Scenario("short-2", dx_m=-1600.0, dy_m=-15.0, dgs_m=0.0, dpsi_deg=0.0, gamma_deg=-3.0), 4)]
+    original = fly_module.monte_carlo_cases
+    fly_module.monte_carlo_cases = lambda n, seed=0: short[:n]
+    try:
+        serial = fly_module.monte_carlo(2, options, tmp_path / "serial", echo=lambda *_: None, sources=("truth",))
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                      dashboard_address=None) as cluster:
+            dask = fly_module.monte_carlo(2, options, tmp_path / "dask", echo=lambda *_: None, sources=("truth",),
+                                          scheduler=cluster.scheduler_address)
+    finally:
+        fly_module.monte_carlo_cases = original
+    assert dask["flown"] == serial["flown"] == 2
+    assert dask["truth"]["landed"] == 2
+    for key in ("touchdown_x_mean_m", "touchdown_y_mean_m", "sink_rate_max_mps"):
+        assert dask["truth"][key] == pytest.approx(serial["truth"][key], abs=1e-9)
+
+
+@pytest.mark.slow
 def test_a_straight_in_glide_path_start_is_weakly_observable_at_400_ft():
     """Started on the glide path 3 km out with the height 20 % high, nothing but the slow
     expansion excites kf-2p's height: 13 % (16 m) off at 400 ft on this machine; the monitor
