@@ -287,6 +287,7 @@ class _Tracked:
         self.fx_px = fx_px
         self.depth_flow_px = 0.0           # fx * integral of sqrt(O) / dH over corrected steps (MonitorParams)
         self._last_yv = None
+        self._offset_m = None              # (dX, dY) of the last measured corners minus the observer's own
 
     def dh_sigma_m(self) -> float:
         """The observer's own standard deviation of dH (metres) from its covariance, NaN for an
@@ -329,16 +330,30 @@ class _Tracked:
             else:
                 self.coast_reason = estimate.reason or ""
         if obs.features == "points":
-            # as visland.estimation.runner: the observer's own corners unless it says they lag the measured ones
-            if inp.points_yv is not None:
+            # as visland.estimation.runner: the observer's own corners, unless it says they lag the
+            # measured ones (kf-2p); then the measured corners on a frame that has them and, between
+            # frames and while coasting, the last measured position moved as the observer predicts:
+            # its own deviations plus the metres by which the last measured corners differed from
+            # its own at that frame. (Read on the last measured corners as they were, the position
+            # froze while the corners were out of the image: on thesis-4-mc3 the guidance turned on
+            # a frozen dY for 30 s and crossed the centreline, 365 m left of it at 400 ft.)
+            own_yv = obs.predicted_points_yv() if hasattr(obs, "predicted_points_yv") else None
+            if own_yv is not None and not (np.isfinite(own_yv).all() and np.abs(own_yv).max() < 1e4):
+                own_yv = None
+            own_dev = deviations_from_points(own_yv, self.dh_m, self.aim_m) if own_yv is not None else None
+            if own_dev is not None and getattr(obs, "deviations_from_own_points", True):
+                d = own_dev
+            elif inp.points_yv is not None:
                 self._last_yv = inp.points_yv
-            # (an observer whose own corners lag is read on the last measured ones between frames too)
-            own = hasattr(obs, "predicted_points_yv") and getattr(obs, "deviations_from_own_points", True)
-            yv = obs.predicted_points_yv() if own else self._last_yv
-            if yv is None or not (np.isfinite(yv).all() and np.abs(yv).max() < 1e4):
-                yv = self._last_yv
-            if yv is not None:
-                d = deviations_from_points(yv, self.dh_m, self.aim_m)
+                d = deviations_from_points(inp.points_yv, self.dh_m, self.aim_m)
+                self._offset_m = ((d.dx_m - own_dev.dx_m, d.dy_m - own_dev.dy_m) if own_dev is not None
+                                  and math.isfinite(own_dev.dx_m + own_dev.dy_m) else None)
+            elif own_dev is not None and self._offset_m is not None:
+                d = None
+                self.dx_m, self.dy_m = own_dev.dx_m + self._offset_m[0], own_dev.dy_m + self._offset_m[1]
+            else:
+                d = deviations_from_points(self._last_yv, self.dh_m, self.aim_m) if self._last_yv is not None else None
+            if d is not None:
                 self.dx_m, self.dy_m = d.dx_m, d.dy_m
         elif inp.lines is not None:
             d = deviations_from_lines(inp.lines, inp.R_runway_from_camera, self.dh_m)

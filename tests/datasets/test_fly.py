@@ -180,6 +180,59 @@ def test_depth_flow_is_the_corner_motion_due_to_the_translation():
 
 
 @pytest.mark.slow
+def test_a_lagging_observer_is_read_on_its_last_measured_corners_moved_as_it_predicts():
+    """kf-2p's deviations come from the measured corners (its own lag them); between frames and
+    while the corners are out of the image the position must move with the observer's
+    prediction, not freeze. A fake observer whose own corners differ from the measured ones
+    by a fixed ratio and advance by 0.01 in y1 per step: the deviations are its own plus the
+    metres by which the measured corners differed at the last frame (closed form through
+    deviations_from_points)."""
+    from visland.datasets.fly import _Tracked
+    from visland.estimation.deviations import deviations_from_points
+
+    class _Estimate:
+        coasting, reason, observability, dh_m = False, "", 0.0, 100.0
+
+    class _Observer:
+        features, name, deviations_from_own_points = "points", "fake", False
+
+        def __init__(self):
+            self.k = 0
+
+        def reset(self, inp, dh0):
+            pass
+
+        def step(self, inp):
+            self.k += 1
+            return _Estimate()
+
+        def predicted_points_yv(self):
+            return np.array([[-20.0 + 0.01 * self.k, -0.11], [-20.0 + 0.01 * self.k, 0.12]])
+
+    class _Inp:
+        v_runway_mps = np.array([70.0, 0.0, -3.6])
+        R_runway_from_camera = np.eye(3)
+        lines = None
+
+        def __init__(self, t, yv=None):
+            self.t_s, self.points_yv = t, yv
+
+    measured = np.array([[-20.3, -0.10], [-20.3, 0.14]])
+    tracked = _Tracked("kf-2p", 320.0)
+    tracked.observer = _Observer()
+    tracked.step(_Inp(0.0, measured), 100.0)
+    tracked.step(_Inp(0.02, measured), 100.0)                    # a frame: read on the measured corners
+    at_frame = deviations_from_points(measured, 100.0, 320.0)
+    assert (tracked.dx_m, tracked.dy_m) == pytest.approx((at_frame.dx_m, at_frame.dy_m))
+    own_then = deviations_from_points(tracked.observer.predicted_points_yv(), 100.0, 320.0)
+    for k in range(2, 30):                                       # no corners for 0.56 s
+        tracked.step(_Inp(0.02 * k), 100.0)
+    own_now = deviations_from_points(tracked.observer.predicted_points_yv(), 100.0, 320.0)
+    assert own_now.dx_m != pytest.approx(own_then.dx_m)           # the prediction moved
+    assert tracked.dx_m == pytest.approx(own_now.dx_m + at_frame.dx_m - own_then.dx_m)
+    assert tracked.dy_m == pytest.approx(own_now.dy_m + at_frame.dy_m - own_then.dy_m)
+
+
 def test_a_decision_height_the_approach_starts_below_is_not_called_out():
     """The short approach starts at 1500 m tan 3 deg = 79 m, below 400 ft (122 m): two decisions."""
     run = fly(_short(), FlyOptions(truth_guided=True, seed=3))
