@@ -10,8 +10,8 @@ import json
 OBSERVER_HELP = ("two points: oj-2p ii-2p cccs-2p ccpi-hg-2p ccpi-hosm-2p cccj-2p kf-2p; two lines: oj-2l ii-2l "
                  "ccpi-2l cccj-2l ekf-2l; ECC'15: ecc-hg ecc-hosm; seed 004 (4D approach): dickmanns-4d; "
                  "or the groups 'points', 'lines', 'ecc', 'dickmanns', 'all'")
-STUDY_NAMES = ("table-5.3", "table-5.4", "table-5.6", "table-5.7", "table-5.8", "table-5.10", "table-5.12", "calibration",
-               "robustness", "ecc", "academic", "dickmanns")
+STUDY_NAMES = ("table-5.3", "table-5.4", "table-5.6", "table-5.7", "lines-5px", "table-5.8", "table-5.10", "table-5.12",
+               "calibration", "robustness", "ecc", "academic", "dickmanns")
 
 
 def _expand_observers(names):

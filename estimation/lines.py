@@ -52,6 +52,30 @@ approach; ekf-2l stays within 2.7 m rms after 10 s. Retuned, rms errors after 10
 ccpi-2l ``omega_rps=1, observability_floor=500`` 1.9 m; ekf-2l ``sigma_line=3e-3`` 1.4 m;
 oj-2l ``gain_alpha=0.002`` 3.4 m; ii-2l ``gain_lambda=5e-4`` 5.3 m; cccj-2l ``omega_rps=1,
 epsilon_sq=500`` 6.3 m (the last three biased by a few metres).
+
+Image noise (issue 12). With 5 px of corner noise the edges' theta errs by 0.06-0.08 rad (median)
+over most of an approach (the lines through two noisy corners; thesis-1, seed 0) and rho by
+0.002-0.005, strongly correlated. With the defaults, oj-2l, ii-2l and ccpi-2l were thrown onto the
+domain bound and cut off as diverged on all eight thesis scenarios, cccj-2l on thesis-6
+(``visland study lines-5px``, seeds as the table studies). The causes and what the 5 px settings
+(``SLOW_5PX_PARAMS`` of :mod:`visland.estimation.study`; the defaults stay the thesis's) change:
+
+- the correction injects each frame's noise: oj-2l's identifier moves eta by
+  ``alpha dt Phi . n`` per frame, which during the thesis scenarios' alignment turn (observability
+  3.40 of 300-600) exceeded eta itself; the thesis's remedy for 5 px (5.2.2.1, "réduire la
+  dynamique de correction") is taken: slower high-gain dynamics for ccpi-2l (omega 0.7 rad/s) and
+  cccj-2l (1 rad/s) in 4.44-4.46, a slow output injection and a smaller gain for oj-2l;
+- oj-2l's regressor ``Phi(y)`` taken at the *measured* edges is correlated with the innovation's
+  noise (``E[Phi(y + n) . n] != 0``): a bias in eta that sent it to a bound on thesis-2, -5 and -6
+  even with the slow gains; at the prediction (``regressor_at_measurement=False``) it is not;
+- ii-2l's sampled I&I increment ``beta(y_meas; y_hat) - beta(y_model; y_hat)`` (4.18, 4.29) has a
+  non-zero mean with noise: ``y_hat`` (4.19, gain 20/s, and the dynamic scaling 4.27-4.28 raising
+  it with the noise) carries the previous frame's noisy rho into ``I_theta``, where it multiplies
+  that frame's theta noise, correlated with it. At the true eta on thesis-1 the increment averaged
+  +0.5 to +0.75 per second over 20-40 s at 5 px (1e-6 at 0 px): eta rose by more than itself per
+  second. With a slow filter (``k_filter=0.1``, ``c_scaling=0``) the mean is -0.01 +- 0.4; the
+  noise then left in eta cancels from frame to frame unless it is projected
+  (``project_state=False``, as ii-2p), and a smaller lambda keeps it small.
 """
 from __future__ import annotations
 
@@ -517,6 +541,9 @@ class II2LParams(ObserverParams):
         ``rho(y)`` of thesis 4.28 (a constant here), 1/s: how fast ``r`` returns to 1.
     max_correction_interval_s : float
         Longest interval used to damp the sampled I&I correction (see :class:`II2L`).
+    project_state : bool
+        Project the state's eta onto ``[ETA_MIN, ETA_MAX]`` after every step (True, default), or
+        only the reported height (False: the 5 px settings; module docstring, "Image noise").
     """
 
     gain_lambda: float = 0.03
@@ -525,6 +552,7 @@ class II2LParams(ObserverParams):
     eps_scaling: float = 1.0
     r_decay: float = 1.0
     max_correction_interval_s: float = 0.1
+    project_state: bool = True
 
     def __post_init__(self):
         self._check_range("gain_lambda", 1e-9, 100.0)
@@ -618,8 +646,8 @@ class II2L(_LineObserver):
         self._r = r * math.exp(min(p.c_scaling * growth * dt_s, 1.0))
         self._y_hat = y_hat
         self._y_model = y_model
-        self._eta = clip_eta(eta)
-        return Estimate(t_s=float(inp.t_s), dh_m=1.0 / self._eta, observability=_observability(y_model, u1),
+        self._eta = clip_eta(eta) if p.project_state else eta     # the reported height always is
+        return Estimate(t_s=float(inp.t_s), dh_m=1.0 / clip_eta(eta), observability=_observability(y_model, u1),
                         coasting=measurement is None, state=self._get_state())
 
 
@@ -637,11 +665,16 @@ class OJ2LParams(ObserverParams):
         edges are tracked the height error decays at about ``alpha sum Phi_i^2 / h`` per second.
     max_correction_interval_s : float
         Longest time a single correction integrates.
+    regressor_at_measurement : bool
+        Take the regressor ``Phi`` at the measured edges (True, default, as [Jankovic 95]) or at the
+        observer's prediction (False: the 5 px settings; with noisy edges the measured regressor
+        is correlated with the innovation, module docstring "Image noise").
     """
 
     k_filter: float = 6.0
     gain_alpha: float = 0.15
     max_correction_interval_s: float = 0.1
+    regressor_at_measurement: bool = True
 
     def __post_init__(self):
         self._check_range("k_filter", 0.01, 1000.0)
@@ -658,7 +691,7 @@ class OJ2L(_LineObserver):
     gradient update of the unmeasured part along the regressor ``Phi``::
 
         y_hat'   = g(y_hat) + Phi(y_hat) eta_hat + h (y - y_hat)
-        eta_hat' = v3 eta_hat^2 + alpha Phi(y)^T (y - y_hat)
+        eta_hat' = v3 eta_hat^2 + alpha Phi(y)^T (y - y_hat)      (Phi(y_hat) if not regressor_at_measurement)
 
     With ``e = y - y_hat`` and ``z = eta - eta_hat`` the error obeys ``e' ~ Phi z - h e``,
     ``z' ~ -alpha Phi^T e`` (up to terms of second order); ``V = |e|^2/2 + z^2/(2 alpha)``
@@ -678,7 +711,8 @@ class OJ2L(_LineObserver):
             ym = measured_pair(measurement, y)
             dtc = self._correction_interval(inp.t_s)
             e = [ym[0] - y[0], ym[1] - y[1], ym[2] - y[2], ym[3] - y[3]]
-            phi = pair_model(ym, eta, u1)[2]                              # regressor at the measured output
+            # the regressor Phi at the measured output (Jankovic), or at the prediction (noise)
+            phi = pair_model(ym if p.regressor_at_measurement else y, eta, u1)[2]
             eta = eta + p.gain_alpha * dtc * (phi[0] * e[0] + phi[1] * e[1] + phi[2] * e[2] + phi[3] * e[3])
             pull = 1.0 - math.exp(-p.k_filter * dtc)                      # exact for the linear injection
             y = [y[i] + pull * e[i] for i in range(4)]

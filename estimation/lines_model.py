@@ -202,6 +202,13 @@ def align_to(theta: float, rho: float, theta_ref: float) -> tuple:
     theta_ref : float
         The reference angle, radians.
     """
+    if not abs(theta - theta_ref) < 8.0 * _PI:
+        # far off (a diverging estimate): in one go, not by millions of turns
+        if not math.isfinite(theta - theta_ref):
+            return theta, rho
+        offset = math.remainder(theta - theta_ref, _PI)          # in [-pi/2, pi/2]
+        k = round((theta - theta_ref - offset) / _PI)
+        return theta_ref + offset, (-rho if k % 2 else rho)
     while theta - theta_ref > 0.5 * _PI:
         theta -= _PI
         rho = -rho

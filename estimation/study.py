@@ -14,6 +14,7 @@ table-5.3       ideal measurements, two points
 table-5.4       ideal measurements, two lines (the line observers of visland.estimation.lines)
 table-5.6       1 px pixel noise, two points
 table-5.7       5 px pixel noise, two points (slower corrections, as the thesis does)
+lines-5px       5 px pixel noise, two lines (issue 12; the thesis has no such table)
 table-5.8       standard deviation of the error along trajectory 1, 1 px and 5 px
 table-5.10      0.5 deg calibration error on the camera mounting, two points
 table-5.12      5 % velocity bias, two points (v_meas = 0.95 v; see VELOCITY_BIAS_FRACTION)
@@ -82,6 +83,12 @@ TABLE_METRICS = (("conv_time_5pct_s", "conv_time_5pct_s_traj1", "conv 5% (s)"),
 #: bound (L = 0.01 left it stuck 15-25 m off after noise pushed it: the derivative row corrects eta by
 #: at most about a2 L / |Phi| per second), ii-2p its default lambda (with its unprojected state,
 #: the halved lambda was worse).
+#: The line observers (issue 12, ``visland study lines-5px``; module docstring of
+#: :mod:`visland.estimation.lines`, "Image noise"): ccpi-2l and cccj-2l slower high-gain dynamics
+#: (4.44-4.46: omega 0.7 and 1 rad/s instead of 2.5); oj-2l a slow output injection (h = 0.5/s), a
+#: smaller identifier gain and its regressor at the prediction; ii-2l a slow measurement filter
+#: without dynamic scaling (4.19, 4.27-4.28), a smaller lambda (4.23) and its eta unprojected;
+#: ekf-2l its defaults.
 SLOW_5PX_PARAMS = {
     "cccs-2p": {"noise_sigma_rad": 5.0 / 2472.0, "max_eta_rate": 0.3},
     "ccpi-hg-2p": {"response_time_s": 12.0},
@@ -89,6 +96,10 @@ SLOW_5PX_PARAMS = {
     "oj-2p": {"k_y": 1.5, "k_eta": 2.5e-4},
     "kf-2p": {"image_sigma_rad": 5.0 / 2472.0},
     "ccpi-hosm-2p": {"lipschitz": 0.1},
+    "ccpi-2l": {"omega_rps": 0.7},
+    "cccj-2l": {"omega_rps": 1.0},
+    "oj-2l": {"k_filter": 0.5, "gain_alpha": 0.05, "regressor_at_measurement": False},
+    "ii-2l": {"k_filter": 0.1, "c_scaling": 0.0, "gain_lambda": 0.003, "project_state": False},
 }
 
 
@@ -166,6 +177,9 @@ STUDIES = {
     "table-5.7": StudySpec("table-5.7", "5 px Gaussian pixel noise, two points (slower corrections)",
                            POINTS_THESIS + POINTS_EXTRA,
                            (Condition("5 px", pixel_noise_px=5.0, params=SLOW_5PX_PARAMS),), thesis_table="5.7"),
+    "lines-5px": StudySpec("lines-5px", "5 px Gaussian pixel noise, two lines (slower corrections; no thesis table)",
+                           LINES_THESIS,
+                           (Condition("5 px", pixel_noise_px=5.0, params=SLOW_5PX_PARAMS),)),
     "table-5.8": StudySpec("table-5.8", "standard deviation of the error along trajectory 1",
                            POINTS_THESIS + POINTS_EXTRA,
                            (Condition("1px", pixel_noise_px=1.0),

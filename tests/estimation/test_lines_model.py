@@ -119,3 +119,21 @@ def test_ii_mismatch_factors_reproduce_the_gradient_defect(samples):
         h = 1e-6
         fd = (edge_terms(theta + h, rho, u)[3] - edge_terms(theta - h, rho, u)[3]) / (2 * h)
         assert d_rho0 == pytest.approx(fd, rel=1e-6, abs=1e-8)
+
+
+def test_align_to_returns_at_once_for_a_reference_far_off():
+    """A diverging estimate can carry theta 1e17 rad away: the chart is found in one go (it looped
+    for ever, one turn of pi at a time, which a float that large does not even change)."""
+    import threading
+    out = {}
+    worker = threading.Thread(target=lambda: out.update(r=align_to(0.1, 0.2, 1e17)), daemon=True)
+    worker.start()
+    worker.join(timeout=5.0)
+    assert "r" in out, "align_to did not return"
+    theta, rho = out["r"]
+    assert abs(theta - 1e17) <= 0.5 * math.pi + 16.0 and abs(rho) == 0.2
+    # a few turns away: the same line, theta within pi/2 of the reference, rho's sign by the parity
+    theta, rho = align_to(0.1, 0.2, 0.1 + 5 * math.pi + 0.3)
+    assert theta == pytest.approx(0.1 + 5 * math.pi) and rho == -0.2
+    theta, rho = align_to(0.1, 0.2, 0.1 - 40 * math.pi)
+    assert theta == pytest.approx(0.1 - 40 * math.pi) and rho == 0.2
