@@ -139,11 +139,9 @@ def _run_parallel(jobs, options, force: bool, echo, workers: int, scheduler: str
         rows[k] = row
 
     if scheduler is not None:
-        from dask.distributed import Client, as_completed
-        try:
-            client = Client(scheduler, timeout=10, set_as_default=False)
-        except (OSError, TimeoutError) as error:
-            raise ValueError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({error})") from None
+        from visland.datasets.cluster import connect_scheduler
+        client = connect_scheduler(scheduler)
+        from distributed import as_completed
         with client:
             shares = opencv_threads_per_worker(client.scheduler_info()["workers"], client.run(os.cpu_count))
             echo(f"batch: {len(jobs)} inputs on the Dask cluster at {scheduler} "

@@ -403,14 +403,9 @@ def _run_pool(workers: int, payload: dict, tasks: list, write) -> None:
 
 
 def _run_dask(address: str, payload: dict, tasks: list, write) -> None:
-    try:
-        from distributed import Client, as_completed
-    except ImportError as error:
-        raise ValueError(f"--scheduler needs dask.distributed, which cannot be imported ({error})") from None
-    try:
-        client = Client(address, timeout=10, set_as_default=False)
-    except (OSError, TimeoutError) as error:
-        raise ValueError(f"--scheduler: cannot reach the Dask scheduler at {address} ({error})") from None
+    from visland.datasets.cluster import connect_scheduler
+    client = connect_scheduler(address)
+    from distributed import as_completed
     try:
         n_workers = max(1, len(client.scheduler_info().get("workers", {})))
         window = 2 * n_workers + 2                       # bounded: PNGs are megabytes each
