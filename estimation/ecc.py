@@ -28,9 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from visland.estimation.base import clip_eta
-from visland.estimation.points import (PointsParams, _PointsObserver, levant_correction, levant_correction_implicit,
-                                       pseudo_inverse_correction)
-from visland.estimation.tuning import LEVANT_A1, LEVANT_A2
+from visland.estimation.points import (PointsParams, _LevantParams, _PointsObserver, levant_correction,
+                                       levant_correction_implicit, pseudo_inverse_correction)
 
 __all__ = ["EccHGParams", "EccHOSMParams", "EccHG", "EccHOSM"]
 
@@ -60,7 +59,7 @@ class EccHGParams(PointsParams):
 
 
 @dataclass(frozen=True)
-class EccHOSMParams(PointsParams):
+class EccHOSMParams(_LevantParams):
     """ECC'15 sliding-mode tuning (eq. 23 and section IV.B): a1, a2 and the bound L.
 
     The paper's ``L = 0.0005`` is for its outputs ``y = epsilon (...)``, scaled by a focal length
@@ -84,15 +83,6 @@ class EccHOSMParams(PointsParams):
     """
 
     lipschitz: float = 3.0e-3
-    a1: float = LEVANT_A1
-    a2: float = LEVANT_A2
-    implicit: bool = True
-
-    def __post_init__(self):
-        super().__post_init__()
-        self._check_positive("lipschitz", "a1", "a2")
-        if not isinstance(self.implicit, bool):
-            raise ValueError(f"{type(self).__name__}.implicit must be true or false, got {self.implicit!r}")
 
 
 class _EccObserver(_PointsObserver):

@@ -373,16 +373,20 @@ class CCPIHGParams(_SecondOrderParams):
 
 
 @dataclass(frozen=True)
-class CCPIHOSMParams(PointsParams):
-    """Pseudo-inverse observer, high-order sliding-mode correction (thesis 4.47-4.49).
+class _LevantParams(PointsParams):
+    """The tuning of Levant's second-order sliding-mode correction, shared by the thesis's
+    ``ccpi-hosm-2p`` (4.47-4.49) and ECC'15's ``ecc-hosm`` (eq. 23), which differ in ``L`` only.
 
     Parameters
     ----------
-    lipschitz : L of 4.47, bound on the output's second derivative error (1/s^2 in virtual
-        coordinates).
-    a1, a2 : Levant's coefficients (1.5 and 1.1).
-    implicit : discretise the sliding-mode terms implicitly (:func:`levant_correction_implicit`,
-        no chattering; default) or by explicit Euler of ``sign`` (the thesis's form).
+    lipschitz : float
+        L of thesis 4.47 (ECC'15 eq. 23), bound on the output's second derivative error (1/s^2
+        in virtual coordinates).
+    a1, a2 : float
+        Levant's coefficients (1.5 and 1.1).
+    implicit : bool
+        Discretise the sliding-mode terms implicitly (:func:`levant_correction_implicit`, no
+        chattering; default) or by explicit Euler of ``sign`` (the thesis's form).
     """
 
     lipschitz: float = 1.0e-2
@@ -395,6 +399,12 @@ class CCPIHOSMParams(PointsParams):
         self._check_positive("lipschitz", "a1", "a2")
         if not isinstance(self.implicit, bool):
             raise ValueError(f"{type(self).__name__}.implicit must be true or false, got {self.implicit!r}")
+
+
+@dataclass(frozen=True)
+class CCPIHOSMParams(_LevantParams):
+    """Pseudo-inverse observer, high-order sliding-mode correction (thesis 4.47-4.49); the tuning
+    of :class:`_LevantParams` with ``L = 0.01``."""
 
 
 @dataclass(frozen=True)
