@@ -235,20 +235,10 @@ def _finish_on_cluster(client, on_cluster: dict, options: CampaignOptions, start
     """Write the cluster's results as each scenario ends: its runs, and its dataset's metadata
     (frames pruned) or its frames, generated on the cluster too and streamed back to this process
     by :func:`visland.datasets.generate.generate_dataset` (frames kept) while the scenarios run."""
-    import shutil
-
     from distributed import as_completed
-
-    from visland.datasets.generate import generate_dataset
     if not options.prune_frames:
         for name, dataset, _, job in on_cluster.values():
-            if _is_streamed(dataset):                     # metadata of an earlier pruned run: generate anew
-                shutil.rmtree(dataset)
-            echo(f"[{time.perf_counter() - started:6.0f} s] generate {name} ({options.size} px, {options.fps:g} Hz) "
-                 f"on {options.scheduler}, frames written here")
-            report = generate_dataset(job, dataset, scheduler=options.scheduler, force=False)
-            echo(f"         {report.n_frames} frames: {report.rendered} rendered, {report.reused} kept, "
-                 f"{report.seconds:.0f} s")
+            _generate(job, dataset, options, started, echo)
     for future in as_completed(list(on_cluster), loop=client.loop):
         name, dataset, todo, _ = on_cluster[future]
         result = future.result()
@@ -261,6 +251,21 @@ def _finish_on_cluster(client, on_cluster: dict, options: CampaignOptions, start
         for line in result["log"].splitlines():
             if "frames: runway found" in line or "in memory in" in line:
                 echo("         " + line)
+
+
+def _generate(job, dataset: Path, options: CampaignOptions, started: float, echo) -> None:
+    """``visland generate`` of one scenario's frames into ``dataset`` (resumed if half done), on the
+    cluster when there is one (each frame a task, written here); the metadata of an earlier
+    streamed run is replaced."""
+    import shutil
+
+    from visland.datasets.generate import generate_dataset
+    if _is_streamed(dataset):
+        shutil.rmtree(dataset)
+    echo(f"[{time.perf_counter() - started:6.0f} s] generate {job.scenario.name} ({options.size} px, "
+         f"{options.fps:g} Hz)" + (f" on {options.scheduler}, frames written here" if options.scheduler else ""))
+    report = generate_dataset(job, dataset, workers=options.workers, scheduler=options.scheduler, force=False)
+    echo(f"         {report.n_frames} frames: {report.rendered} rendered, {report.reused} kept, {report.seconds:.0f} s")
 
 
 def _has_frames(dataset: Path) -> bool:
@@ -304,7 +309,7 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
     from visland.camera import CameraModel
     from visland.cli import simulation_options_from_args
     from visland.datasets.compare import compare_runs
-    from visland.datasets.generate import GenerateJob, generate_dataset
+    from visland.datasets.generate import GenerateJob
     from visland.datasets.process import DEFAULT_OBSERVERS
     from visland.render.params import SceneParams
     from visland.scenarios import resolve_scenario
@@ -374,14 +379,7 @@ def run_campaign(options: CampaignOptions, out_dir, force: bool = False, echo=pr
                     if "frames: runway found" in line or "in memory in" in line or "background writer" in line:
                         echo("         " + line)
                 continue
-            if _is_streamed(dataset):                     # metadata of an earlier streamed run: generate anew
-                import shutil
-                shutil.rmtree(dataset)
-            echo(f"[{time.perf_counter() - started:6.0f} s] generate {scenario.name} ({options.size} px, "
-                 f"{options.fps:g} Hz)")
-            report = generate_dataset(job, dataset, workers=options.workers, force=False)
-            echo(f"         {report.n_frames} frames: {report.rendered} rendered, {report.reused} kept, "
-                 f"{report.seconds:.0f} s")
+            _generate(job, dataset, options, started, echo)
             echo(f"[{time.perf_counter() - started:6.0f} s] process {scenario.name} with {', '.join(todo)}")
             text = _process_task(str(dataset), todo, observers)
             for line in text.splitlines():
