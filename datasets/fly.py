@@ -773,9 +773,10 @@ def _options_for(options: FlyOptions, source: str, seed: int) -> FlyOptions:
 
 
 def fly_and_keep(scenario, options: FlyOptions, path, cv_threads: dict | None = None) -> dict:
-    """Fly one Monte Carlo flight and write its JSON to ``path`` atomically (module level, so
-    that a Dask worker can run it); return it. ``cv_threads``: on Dask, worker address ->
-    OpenCV threads (:func:`visland.datasets.batch.opencv_threads_per_worker`)."""
+    """Fly one Monte Carlo flight and write its JSON to ``path`` atomically (None: not written; a
+    Dask task returns it and the client writes it); return it. Module level, so that a Dask
+    worker can run it. ``cv_threads``: on Dask, worker address -> OpenCV threads
+    (:func:`visland.datasets.batch.opencv_threads_per_worker`)."""
     import json
     from visland.contracts import atomic_write_text, json_ready
     if cv_threads:
@@ -783,27 +784,32 @@ def fly_and_keep(scenario, options: FlyOptions, path, cv_threads: dict | None = 
         from dask.distributed import get_worker
         cv2.setNumThreads(cv_threads.get(get_worker().address, 0))
     r = json_ready(fly(scenario, options))
-    atomic_write_text(path, json.dumps(r) + "\n")
+    if path is not None:
+        atomic_write_text(path, json.dumps(r) + "\n")
     return r
 
 
 def _fly_on_cluster(pending, scheduler: str, echo) -> None:
     """Fly ``pending`` ``(scenario, options, path)`` flights as one Dask task each on the cluster
-    at ``scheduler``; each writes its own JSON (:func:`fly_and_keep`)."""
+    at ``scheduler``; each flight's JSON comes back and is written here (the workers need no file
+    system shared with this process)."""
+    import json
     import os
-    from dask.distributed import Client, as_completed
+
+    from dask.distributed import as_completed
+
+    from visland.contracts import atomic_write_text
     from visland.datasets.batch import opencv_threads_per_worker
-    try:
-        client = Client(scheduler, timeout=10, set_as_default=False)
-    except (OSError, TimeoutError) as error:
-        raise ValueError(f"--scheduler: cannot reach the Dask scheduler at {scheduler} ({error})") from None
+    from visland.datasets.cluster import connect_scheduler
+    client = connect_scheduler(scheduler)
     with client:
         shares = opencv_threads_per_worker(client.scheduler_info()["workers"], client.run(os.cpu_count))
         echo(f"monte carlo: {len(pending)} flights on the Dask cluster at {scheduler}")
-        futures = {client.submit(fly_and_keep, scenario, options, str(path), shares, pure=False): path
+        futures = {client.submit(fly_and_keep, scenario, options, None, shares, pure=False): path
                    for scenario, options, path in pending}
         for future in as_completed(list(futures), loop=client.loop):
             r = future.result()
+            atomic_write_text(futures[future], json.dumps(r) + "\n")
             echo(f"{futures[future].name}: flown on the cluster ({r['wall_s']:.0f} s)")
 
 
