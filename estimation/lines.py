@@ -320,6 +320,12 @@ def _check_correction_interval(params) -> None:
     params._check_range("max_correction_interval_s", 0.005, 1.0)
 
 
+def _check_bool(params, name: str) -> None:
+    value = getattr(params, name)
+    if not isinstance(value, bool):
+        raise ValueError(f"{type(params).__name__}.{name} must be true or false, got {value!r}")
+
+
 # --------------------------------------------------------------------------- ccpi-2l
 @dataclass(frozen=True)
 class CCPI2LParams(ObserverParams):
@@ -561,6 +567,7 @@ class II2LParams(ObserverParams):
         self._check_range("eps_scaling", 0.0, 1e6)
         self._check_range("r_decay", 0.0, 100.0)
         _check_correction_interval(self)
+        _check_bool(self, "project_state")
 
 
 class II2L(_LineObserver):
@@ -680,6 +687,7 @@ class OJ2LParams(ObserverParams):
         self._check_range("k_filter", 0.01, 1000.0)
         self._check_range("gain_alpha", 1e-9, 1e4)
         _check_correction_interval(self)
+        _check_bool(self, "regressor_at_measurement")
 
 
 class OJ2L(_LineObserver):

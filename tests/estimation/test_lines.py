@@ -409,3 +409,14 @@ def test_ii2l_slow_filter_removes_the_noise_bias_of_the_sampled_increment():
     mean_slow, sem_slow = increments(SLOW_5PX_PARAMS["ii-2l"])
     assert mean_default > 2.0 * sem_default
     assert abs(mean_slow) < 1.0 * sem_slow
+
+
+@pytest.mark.parametrize("params_type, field", [(OJ2LParams, "regressor_at_measurement"), (II2LParams, "project_state")])
+def test_the_5_px_switches_are_booleans_that_round_trip(tmp_path, params_type, field):
+    with pytest.raises(ValueError, match=field):
+        params_type(**{field: 1.0})
+    flipped = params_type(**{field: not getattr(params_type(), field)})
+    for suffix in (".json", ".toml"):
+        path = tmp_path / f"p{suffix}"
+        flipped.save(path)
+        assert params_type.load(path) == flipped
