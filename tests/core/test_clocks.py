@@ -28,7 +28,7 @@ def _recording(seed: int, drift_deg: float):
     return times, rolls, t_tel, roll_tel
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("seed", [0, pytest.param(1, marks=pytest.mark.slow), pytest.param(2, marks=pytest.mark.slow)])
 def test_a_slowly_drifting_horizon_does_not_shift_the_offset(seed):
     """With 0.3 deg of linear drift a constant-difference model was 11-15 ms off on these three
     seeds (measured); the drift-aware one is within 7 ms, inside three of its own sigmas, and
@@ -39,6 +39,7 @@ def test_a_slowly_drifting_horizon_does_not_shift_the_offset(seed):
     assert found.inliers <= found.frames_used - 10
 
 
+@pytest.mark.slow
 def test_without_drift_the_estimate_is_unchanged_by_the_drift_model():
     """The same recording without drift: the same offset to the millisecond as with it (the drift
     costs nothing when there is none)."""

@@ -121,6 +121,7 @@ def test_measurements_are_trusted_after_a_full_window_found_in_80_percent_of_the
     assert _measurements_trusted(m, mostly, 1.0)
 
 
+@pytest.mark.slow
 def test_no_estimate_before_the_measurements_are_trusted(landings):
     """Exact features are found in every frame: trusted from the first full window (1 s), and the
     observers' estimates in the per-frame trace start there, not before."""
@@ -233,6 +234,7 @@ def test_a_lagging_observer_is_read_on_its_last_measured_corners_moved_as_it_pre
     assert tracked.dy_m == pytest.approx(own_now.dy_m + at_frame.dy_m - own_then.dy_m)
 
 
+@pytest.mark.slow
 def test_a_decision_height_the_approach_starts_below_is_not_called_out():
     """The short approach starts at 1500 m tan 3 deg = 79 m, below 400 ft (122 m): two decisions."""
     run = fly(_short(), FlyOptions(truth_guided=True, seed=3))

@@ -76,6 +76,7 @@ def test_bench_render_prints_its_figures_as_the_last_json_line(capsys):
     assert "1" in data["png_levels"]
 
 
+@pytest.mark.slow
 def test_uniforms_held_by_a_program_are_not_sent_again_and_the_frames_are_the_same_bytes(monkeypatch):
     """glview._cache_uniforms skips a uniform value the program already holds: the frames of a
     short sequence (two poses, each drawn twice, interleaved) are byte-identical to pyrender's
