@@ -312,6 +312,23 @@ def _make_renderer_class():
     return _ColourRenderer
 
 
+def _destroy_context_only(platform) -> None:
+    """Make pyrender's EGL ``platform`` destroy its context without terminating the shared
+    display (:meth:`OffscreenView.close`); other platforms are left as they are."""
+    if not hasattr(platform, "_egl_display"):
+        return
+
+    def delete_context():
+        from OpenGL.EGL import EGL_NO_CONTEXT, EGL_NO_SURFACE, eglDestroyContext, eglMakeCurrent
+        if platform._egl_display is not None and platform._egl_context is not None:
+            eglMakeCurrent(platform._egl_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT)
+            eglDestroyContext(platform._egl_display, platform._egl_context)
+        platform._egl_context = None
+        platform._egl_display = None
+
+    platform.delete_context = delete_context
+
+
 def _cache_uniforms(program) -> None:
     """Make ``program.set_uniform`` skip a value the program already holds.
 
@@ -495,9 +512,17 @@ class OffscreenView:
         return self._offscreen.render(scene, self._flags)
 
     def close(self) -> None:
-        """Release the GL context (idempotent)."""
+        """Release this view's GL context (idempotent), and only it.
+
+        pyrender's EGL platform also terminates the EGL display when it deletes a context; the
+        display is one per process, shared by every view, so that killed the contexts of the
+        other views still open (their next render or close failed with EGL_BAD_DISPLAY or
+        EGL_NOT_INITIALIZED: a renderer cached by ``visland.datasets.generate`` after another
+        one was closed). The display stays initialised for the process's life.
+        """
         if getattr(self, "_offscreen", None) is not None:
             try:
+                _destroy_context_only(self._offscreen._platform)
                 self._offscreen.delete()
             finally:
                 self._offscreen = None

@@ -80,6 +80,28 @@ def test_image_rows_are_top_first_and_columns_left_first(shader_dir):
     assert rows.max() < 64 and cols.max() < 64   # up and to the left: top-left quadrant
 
 
+def test_closing_one_view_leaves_the_others_rendering(shader_dir):
+    """Two views in one process (the EGL display is shared): closing one must not end the other,
+    which renders the same bytes after as before and closes cleanly (pyrender's own close
+    terminated the display: the other's next render failed with EGL_BAD_DISPLAY)."""
+    camera = CameraModel.default(64)
+    R_cr = R_camera_from_runway(0.0, 0.0, 0.0, (0.0, 0.0, 0.0))
+    p_cam = np.array([0.0, 0.0, -100.0])
+    corners = [[100.0, -30.0, -130.0], [100.0, -20.0, -130.0], [100.0, -20.0, -120.0], [100.0, -30.0, -120.0]]
+    scene = _marker_scene(corners)                     # a pyrender scene is bound to one context: one each
+    kept, closed = OffscreenView(camera, shader_dir, samples=0), OffscreenView(camera, shader_dir, samples=0)
+    try:
+        before = kept.render(scene, p_cam, R_cr, 1.0, 1000.0)
+        assert np.array_equal(closed.render(_marker_scene(corners), p_cam, R_cr, 1.0, 1000.0), before)
+        closed.close()
+        assert before.max() == 255 and np.array_equal(kept.render(scene, p_cam, R_cr, 1.0, 1000.0), before)
+        again = OffscreenView(camera, shader_dir, samples=0)         # a view opened after a close works too
+        assert np.array_equal(again.render(_marker_scene(corners), p_cam, R_cr, 1.0, 1000.0), before)
+        again.close()
+    finally:
+        kept.close()
+
+
 def test_projection_matrix_maps_pixel_centres_to_half_integer_windows():
     camera = CameraModel(200, 100, fx=150.0, fy=160.0, cx=90.3, cy=40.7)
     P = gl_projection_matrix(camera, 0.5, 1000.0)

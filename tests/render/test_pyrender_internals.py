@@ -23,6 +23,7 @@ import pytest
 pyrender = pytest.importorskip("pyrender")
 from pyrender.camera import Camera  # noqa: E402
 from pyrender.offscreen import OffscreenRenderer  # noqa: E402
+from pyrender.platforms.egl import EGLPlatform  # noqa: E402
 from pyrender.renderer import Renderer  # noqa: E402
 from pyrender.shader_program import ShaderProgram, ShaderProgramCache  # noqa: E402
 from pyrender.texture import Texture  # noqa: E402
@@ -37,6 +38,8 @@ FINGERPRINTS = {
     "pyrender.texture.Texture._add_to_context": (Texture._add_to_context, "5bbf2597fb0fe575"),
     "pyrender.camera.Camera": (Camera, "6c3fb29306d45de5"),
     "pyrender.shader_program.ShaderProgramCache": (ShaderProgramCache, "b63dde8e06f200af"),
+    # OffscreenView.close replaces it (it terminates the EGL display every view shares)
+    "pyrender.platforms.egl.EGLPlatform.delete_context": (EGLPlatform.delete_context, "36b214582e059528"),
     # glview._cache_uniforms wraps it: a program's uniforms are set on the bound program only
     "pyrender.shader_program.ShaderProgram.set_uniform": (ShaderProgram.set_uniform, "760f2de731648eba"),
 }
