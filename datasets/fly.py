@@ -90,6 +90,34 @@ class MonitorParams:
     object 21 px to the side, and kf-2p, started on it, was sent to dH 1900-2500 m and rejected
     every later measurement; from the first full second with the runway found in 80 % of the
     frames (8 s later, 5.4 km) every found corner was within 1.3 px of the exact one.
+
+    Attributes
+    ----------
+    decision_heights_ft : tuple of float
+        True heights (ft) at which the decision is taken.
+    window_s : float
+        How far back (s) the detection and the observability are judged.
+    min_found_fraction : float
+        Fraction of the window's frames in which the runway must be found.
+    min_confidence : float
+        Median detection confidence of the window's found frames, 0-1.
+    agreement_sigmas : float
+        ``|dH points - dH lines|`` must lie within this many of its expected standard deviation.
+    expected_dh_error : tuple of tuple
+        ``(height ft, points, lines)``: the RMS relative dH error of the point and the line
+        observer expected at that height (the entry nearest the decision height applies).
+    max_dy_disagreement_m : float
+        Largest ``|dY points - dY lines|`` (m).
+    max_coast_s : float
+        Longest time (s) since the guidance observer's last correction.
+    min_depth_flow_px : float
+        Smallest accumulated corner motion due to the translation (px of the camera, "depth flow").
+    agreement_below_ft : float
+        The agreement is judged below this true height (ft) only.
+
+    References
+    ----------
+    Thesis (seed 002) eq. 3.29-3.30 (the observability index ``O`` and ``y_v' = Phi eta``).
     """
 
     decision_heights_ft: tuple = (400.0, 200.0, 100.0)
@@ -116,7 +144,48 @@ class StabilisedGate:
 
 @dataclass(frozen=True)
 class FlyOptions:
-    """What ``visland fly`` flies (see its --help)."""
+    """What ``visland fly`` flies (see its --help); validated on construction (``ValueError``
+    naming the option).
+
+    Attributes
+    ----------
+    observer : str
+        The two-point observer whose estimates guide (SPEC name; lines do not observe dX).
+    monitor_observer : str
+        The line observer the monitor compares it with.
+    measure : str
+        ``simulated`` (exact features plus ``pixel_noise_px``) or ``detection`` (rendered frames).
+    pixel_noise_px : float
+        Corner noise (px, standard deviation) in simulated mode.
+    size : int
+        Image width and height (px) of the SPEC default camera scaled to it.
+    truth_guided : bool
+        Fly on the true state (the baseline); the monitor's decision is recorded, not flown.
+    flare_height_source : str
+        ``vision`` (the estimate) or ``radio`` (a simulated radio altimeter below 50 ft).
+    radio_noise_m : float
+        The radio altimeter's white noise (m, standard deviation).
+    initial_height_m : float or None
+        The observers' initial height guess (m); None: ``initial_error`` above the true height.
+    initial_error : float
+        Relative error of the default initial guess (0.2: the seeds' 20 %).
+    seed : int
+        Seed of the pixel noise and the scene.
+    fps : float
+        Camera frame rate (Hz), a divisor of the 50 Hz flight rate.
+    calibration_error_deg : tuple of float
+        (roll, pitch, yaw) error (deg) of the camera mounting the estimator does not know.
+    detection_lost_below_ft : float or None
+        Fault: the runway is not found below this true height (ft).
+    frozen_frames_at_ft : float or None
+        Fault: the frame stream repeats one frame for 1 s from this true height (ft).
+    monitor : MonitorParams
+        The continue-or-go-around rule.
+    gate : StabilisedGate
+        Where the approach must be stabilised (the flight-envelope report).
+    flare : visland.flight.FlareParams
+        The flare law and the main gear.
+    """
 
     observer: str = "kf-2p"
     monitor_observer: str = "ekf-2l"
@@ -168,7 +237,18 @@ class _Row(dict):
 
 class StepInputs:
     """Causal, step-by-step version of :func:`visland.estimation.inputs.prepare_inputs` (without
-    the mounting's self-calibration): the same quantities from the same helpers."""
+    the mounting's self-calibration): the same quantities from the same helpers.
+
+    Parameters
+    ----------
+    camera : visland.camera.CameraModel
+        The camera the estimator is told about (its mounting turns d_F into dpsi).
+
+    References
+    ----------
+    Gibert et al., range identification in perspective systems (seeds 001/003), appendix eq.
+    18-19 (dpsi from d_F).
+    """
 
     def __init__(self, camera):
         self.camera = camera
@@ -387,7 +467,29 @@ def _empty_row(t_s, why=""):
 
 
 def fly(scenario, options: FlyOptions, echo=None) -> dict:
-    """Fly ``scenario`` closed loop (module docstring); return the figures of the JSON line."""
+    """Fly ``scenario`` closed loop (module docstring); return the figures of the JSON line.
+
+    Parameters
+    ----------
+    scenario : visland.scenarios.Scenario
+        The approach's start, runway and wind.
+    options : FlyOptions
+        What to fly and how.
+    echo : callable, optional
+        Takes each printed line (a str); None: nothing printed.
+
+    Returns
+    -------
+    dict
+        ``touchdown_x_m``, ``touchdown_y_m`` (main gear in the runway frame, m; None after a
+        go-around), ``sink_rate_mps``, ``go_around`` and its reason, ``dh_err_100ft_m`` (truth -
+        estimate), the decisions at each decision height, ``wall_s`` and the other figures of the
+        JSON line.
+
+    References
+    ----------
+    Thesis (seed 002) ch. 4 (the observers) and 3.30 (their observability index).
+    """
     from visland.camera import CameraModel
     from visland.sensors import camera_with_calibration_error
     from visland.features import batch_R_camera_from_runway

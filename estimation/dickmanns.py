@@ -85,6 +85,12 @@ line ``y = -W/2`` (as seen by a pilot landing), the threshold ``x = 0``. Lines
 ``x cos(theta) + y sin(theta) = rho`` in normalised image coordinates, theta in [-pi/2, pi/2); a
 measured line is written in the representative ``(rho, theta)`` or ``(-rho, theta +- pi)`` nearest
 the prediction.
+
+References
+----------
+E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
+(seed 004).
+    Eq. (1)-(4o), sec. 3-4 (model, measurements, EKF) and 7 (accuracy).
 """
 from __future__ import annotations
 

@@ -20,6 +20,12 @@ closed form of :func:`visland.estimation.points.pseudo_inverse_correction`.
 
 The time discretisation is that of :mod:`visland.estimation.points` (exact model flow between
 frames, correction at each frame). State: ``[z1, z2, z3, z4]``.
+
+References
+----------
+V. Gibert, L. Burlion, A. Chriette, J. Boada, F. Plestan, "Nonlinear observers in vision system:
+application to civil aircraft landing", European Control Conference, 2015 (seed 000).
+    Eq. (1)-(24) and Table I.
 """
 from __future__ import annotations
 

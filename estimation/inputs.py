@@ -29,6 +29,16 @@ Steps are the telemetry samples from the first to the last frame, plus the frame
 are not on the telemetry grid (inertial data interpolated there, angles unwrapped). A frame
 whose measurement is missing (found = 0, empty cells, a corner outside the image) leaves its
 step without that feature: the observers coast across it and say so.
+
+References
+----------
+V. Gibert, L. Burlion, A. Chriette, J. Boada, F. Plestan, "A new observer for range
+identification in perspective vision systems", Advances in Aerospace Guidance, Navigation
+and Control (seeds 001 and 003).
+    Appendix, eq. 18-19: d_F and the heading deviation.
+V. Gibert, "Analyse d'observabilite et synthese d'observateurs robustes pour l'atterrissage
+base vision d'avions de ligne sur des pistes inconnues", PhD thesis, 2016 (seed 002).
+    Eq. 3.19-3.24: the virtual frame and eta = 1/dH.
 """
 from __future__ import annotations
 

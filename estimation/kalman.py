@@ -45,6 +45,12 @@ freedom: on measurements that fit the model (ideal or as noisy as ``image_sigma_
 filter is the annex's.
 
 State (``Estimate.state``): ``[X, Y', Y'', Z]`` in metres; ``dH = Z``.
+
+References
+----------
+V. Gibert, "Analyse d'observabilite et synthese d'observateurs robustes pour l'atterrissage
+base vision d'avions de ligne sur des pistes inconnues", PhD thesis, 2016 (seed 002).
+    Annex 5.4-5.6: the Kalman filter with pseudo-measurements (EKF_2P).
 """
 from __future__ import annotations
 

@@ -76,6 +76,13 @@ domain bound and cut off as diverged on all eight thesis scenarios, cccj-2l on t
   second. With a slow filter (``k_filter=0.1``, ``c_scaling=0``) the mean is -0.01 +- 0.4; the
   noise then left in eta cancels from frame to frame unless it is projected
   (``project_state=False``, as ii-2p), and a smaller lambda keeps it small.
+
+References
+----------
+V. Gibert, "Analyse d'observabilite et synthese d'observateurs robustes pour l'atterrissage
+base vision d'avions de ligne sur des pistes inconnues", PhD thesis, 2016 (seed 002).
+    Eq. 3.34-3.40 (lines, their observability), ch. 4.4-4.5 (the line observers) and annex
+    5.7-5.9 (the EKF on two lines).
 """
 from __future__ import annotations
 

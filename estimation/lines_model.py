@@ -47,6 +47,12 @@ The chart: each edge follows its line continuously; a measured edge is written i
 representative ``(rho, theta)`` or ``(-rho, theta -+ pi)`` nearest to the observer's edge
 (:func:`align_to`), so an edge whose theta crosses the SPEC chart boundary never produces a
 jump of pi in the innovation. The dynamics above are the same in both representatives.
+
+References
+----------
+V. Gibert, "Analyse d'observabilite et synthese d'observateurs robustes pour l'atterrissage
+base vision d'avions de ligne sur des pistes inconnues", PhD thesis, 2016 (seed 002).
+    Eq. 3.34 (the (rho, theta) chart), 3.39-3.40, 4.14 and 4.74 (the two-edge model).
 """
 from __future__ import annotations
 

@@ -22,6 +22,16 @@ point with exact measurements is the true state, with no lag.
 
 Each observer keeps the predicted points ``y_hat`` and ``eta_hat``; its state vector
 (``Estimate.state``) is ``[y'1, y'2, y''1, y''2, eta]`` unless its docstring says otherwise.
+
+References
+----------
+V. Gibert, "Analyse d'observabilite et synthese d'observateurs robustes pour l'atterrissage
+base vision d'avions de ligne sur des pistes inconnues", PhD thesis, 2016 (seed 002).
+    Ch. 3.3 (virtual frame, eq. 3.19-3.30) and 4.1-4.3 (the two-point observers, eq. 4.1-4.58;
+    eq. 4.55 corrected as ../shared/seeds/README.md says).
+V. Gibert, L. Burlion, A. Chriette, J. Boada, F. Plestan, "Nonlinear observers in vision system:
+application to civil aircraft landing", European Control Conference, 2015 (seed 000).
+    Eq. (21)-(24): the sliding-mode correction (Levant's differentiator).
 """
 from __future__ import annotations
 

@@ -22,6 +22,13 @@ with the high-gain term ``kappa = Lambda^-1 K (y - C(x_hat))`` (eq. 11-13):
 Its determinant is the observability index (eq. 4). The academic example (eq. 14-16: A, B,
 ``x(0) = (1, 1.5, 2.5)``, ``x_hat(0) = (0.4, 0.6, 1)``, xi = 0.99, omega = 7, alpha = 1) is
 :func:`academic_example`.
+
+References
+----------
+V. Gibert, L. Burlion, A. Chriette, J. Boada, F. Plestan, "A new observer for range
+identification in perspective vision systems", Advances in Aerospace Guidance, Navigation
+and Control (seeds 001 and 003).
+    Eq. 1-16.
 """
 from __future__ import annotations
 

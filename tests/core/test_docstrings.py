@@ -1,10 +1,9 @@
 """Public callables document every parameter in a numpydoc Parameters section (STYLE.md).
 
 Checked: each package's exports (its ``__all__``), the command-line entry points (every public
-function of the ``cli`` modules), every public module of the packages in
-:data:`DOCUMENTED_PACKAGES`, and the modules in :data:`DOCUMENTED_MODULES` (add a module once it
-is documented, a package once all its modules are). ``python -m tests.helpers.numpydoc -v``
-lists what the rest of the tree still lacks.
+function of the ``cli`` modules) and every public module of every package
+(:data:`DOCUMENTED_PACKAGES`); ``python -m tests.helpers.numpydoc -v`` counts them per package
+and names any parameter left undocumented.
 """
 from __future__ import annotations
 
@@ -12,7 +11,8 @@ import importlib
 
 import pytest
 
-from tests.helpers.numpydoc import documented_parameters, public_callables, public_modules, undocumented_parameters
+from tests.helpers.numpydoc import (PACKAGES, documented_parameters, public_callables, public_modules,
+                                   undocumented_parameters)
 
 EXPORTING_PACKAGES = ("visland.detection", "visland.tracking", "visland.render")
 
@@ -20,15 +20,9 @@ CLI_MODULES = ("visland.cli", "visland.footage_cli", "visland.render.cli", "visl
                "visland.tracking.cli", "visland.estimation.cli", "visland.datasets.cli",
                "visland.datasets.generate_cli")
 
-#: Packages whose every public module documents every public function and class (a new module
-#: of theirs is checked as soon as it exists).
-DOCUMENTED_PACKAGES = ("visland", "visland.render", "visland.detection", "visland.tracking", "visland.estimation")
-
-#: Modules, in the packages not yet documented throughout, whose whole public API is documented.
-DOCUMENTED_MODULES = ("visland.datasets.batch", "visland.datasets.compare", "visland.datasets.generate",
-                      "visland.datasets.lard", "visland.datasets.measure", "visland.datasets.pixel_errors",
-                      "visland.datasets.process", "visland.datasets.report", "visland.datasets.sources",
-                      "visland.datasets.stream")
+#: Every package documents every public function and class of every public module (a new module
+#: is checked as soon as it exists).
+DOCUMENTED_PACKAGES = PACKAGES
 
 
 def _callables(module_names):
@@ -43,8 +37,7 @@ def _package_callables(package_names):
 
 
 @pytest.mark.parametrize("qualname, obj", [
-    *_callables(EXPORTING_PACKAGES), *_callables(CLI_MODULES), *_package_callables(DOCUMENTED_PACKAGES),
-    *_callables(DOCUMENTED_MODULES)],
+    *_callables(EXPORTING_PACKAGES), *_callables(CLI_MODULES), *_package_callables(DOCUMENTED_PACKAGES)],
     ids=lambda value: value if isinstance(value, str) else "")
 def test_public_callable_documents_its_parameters(qualname, obj):
     missing = undocumented_parameters(obj)
@@ -133,3 +126,23 @@ def test_the_checker_takes_an_inherited_constructors_documentation():
 
     assert undocumented_parameters(Child) == []
     assert undocumented_parameters(Extended) == ["gain"]
+
+
+# every observer's algorithm is cited: its module's docstring ends with a numpydoc References
+# section naming the seed document it implements (STYLE.md: cite the seed equation or paper)
+
+def _observer_modules():
+    from visland.estimation.registry import OBSERVER_NAMES, make_observer
+    return sorted({type(make_observer(name)).__module__ for name in OBSERVER_NAMES})
+
+
+@pytest.mark.parametrize("module_name", _observer_modules())
+def test_an_observer_module_cites_its_seed_in_a_references_section(module_name):
+    import inspect
+    import re
+    lines = inspect.cleandoc(importlib.import_module(module_name).__doc__ or "").splitlines()
+    assert "References" in lines and lines[lines.index("References") + 1].startswith("---"), (
+        f"{module_name}: its docstring has no References section")
+    references = "\n".join(lines[lines.index("References") + 2:])
+    assert re.search(r"\(seeds? 00\d", references), f"{module_name}: its References name no seed document"
+    assert re.search(r"[Ee]q\. ?\(?\d|[Aa]nnex \d", references), f"{module_name}: its References name no equation"
