@@ -28,12 +28,9 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
-from visland.detection.refine import SLOPE_PER_STEP, median_of, sample_profiles, transition_offsets
+from visland.detection.refine import (MAD_TO_SIGMA, SLOPE_PER_STEP, TUKEY_C, median_of, sample_profiles,
+                                      transition_offsets)
 
-#: Median absolute deviation to standard deviation (Gaussian noise).
-MAD_TO_SIGMA = 1.4826
-#: Tukey biweight cut-off, in robust sigmas (95 % efficiency under Gaussian noise).
-TUKEY_C = 4.685
 #: sqrt(pi / 2): Gaussian residuals' mean absolute value times this is their standard deviation
 #: (applied to the median absolute residual, its robust stand-in).
 MEDIAN_ABS_TO_SIGMA = 1.2533

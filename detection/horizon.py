@@ -30,7 +30,25 @@ import numpy as np
 from visland.camera import CameraModel
 from visland.features import batch_R_camera_from_runway, horizon_line
 
-__all__ = ["HorizonFrame", "horizon_frame"]
+__all__ = ["HorizonFrame", "horizon_frame", "meet_h"]
+
+
+def meet_h(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:
+    """Pixel point(s) where homogeneous pixel lines meet.
+
+    Parameters
+    ----------
+    line_a, line_b : ndarray, shape (..., 3)
+        Lines ``a u + b v + c = 0`` (broadcast against each other).
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        ``(u, v)`` of each intersection (inf or NaN for parallel lines).
+    """
+    p = np.cross(line_a, line_b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return p[..., :2] / p[..., 2:3]
 
 
 @dataclass(frozen=True)
@@ -104,6 +122,11 @@ class HorizonFrame:
         r2 = np.cross(self.down_camera, r1)
         v2 = K @ r2
         return v2 / np.linalg.norm(v2)
+
+    def parallel_h(self, depth: float) -> np.ndarray:
+        """Homogeneous pixel line (3,) parallel to the horizon at ``depth`` pixels below it."""
+        n = self.n_uv
+        return np.array([n[0], n[1], -(n @ self.q_uv) - depth])
 
     # ----------------------------------------------------------------- image tests
     def crosses_image(self, width: int, height: int, margin_px: float = 0.0) -> bool:

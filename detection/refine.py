@@ -35,6 +35,10 @@ RAMP_SLOPE_PER_STEP = 0.5
 BOUNDARY_STEP_PX = 0.5
 #: Room (px) added beyond the search band so the derivative kernels see whole steps.
 KERNEL_ROOM_PX = 3.0
+#: Median absolute deviation to standard deviation (Gaussian noise).
+MAD_TO_SIGMA = 1.4826
+#: Tukey biweight cut-off, in robust sigmas (95 % efficiency under Gaussian noise).
+TUKEY_C = 4.685
 
 
 @dataclass(frozen=True)
@@ -527,10 +531,9 @@ def stripe_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
 
     Parameters
     ----------
-    profiles : ndarray, shape (n, m)
-        Grey levels across the line, NaN outside the frame.
-    offsets : ndarray, shape (m,)
-        Position of each sample along the normal, pixels (evenly spaced).
+    profiles, offsets : ndarray, shapes (n, m) and (m,)
+        Profiles across the line and the positions of their samples along its normal, as
+        :func:`sample_profiles` returns them (pixels, evenly spaced; NaN outside the frame).
     polarity : int
         +1 for a bright stripe, -1 for a dark one.
     max_width_px : float or ndarray, shape (n,)
@@ -623,9 +626,9 @@ def fit_line(points: np.ndarray, weights: np.ndarray, min_sigma_px: float = 0.05
         active = r[w > 0]
         centre = float(median_of(active)) if active.size else 0.0
         mad = float(median_of(np.abs(active - centre))) if active.size else 0.0
-        sigma = max(1.4826 * mad, min_sigma_px)
+        sigma = max(MAD_TO_SIGMA * mad, min_sigma_px)
         # residuals about their median: a first fit pulled by outliers still keeps its inliers
-        u = (r - centre) / (4.685 * sigma)
+        u = (r - centre) / (TUKEY_C * sigma)
         w = w0 * np.where(np.abs(u) < 1.0, (1 - u ** 2) ** 2, 0.0)
     inliers_usable = w > 0
     mask = np.zeros(len(usable), dtype=bool)

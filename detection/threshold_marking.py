@@ -35,9 +35,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from visland.detection.horizon import HorizonFrame
+from visland.detection.horizon import HorizonFrame, meet_h
 from visland.detection.refine import PixelLine
-from visland.detection.transverse import TransverseLine
+from visland.detection.transverse import TransverseLine, edge_crossings_s, transverse_grid, transverse_line_h
 
 __all__ = ["ThresholdMarking", "threshold_marking", "ground_begins", "STRIPES_FROM_THRESHOLD_WIDTHS"]
 
@@ -64,17 +64,6 @@ class ThresholdMarking:
     line: TransverseLine
     kind: str
     pavement_widths: float
-
-
-def _meet(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    p = np.cross(a, b)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return p[..., :2] / p[..., 2:3]
-
-
-def _horizon_parallel(horizon: HorizonFrame, depth: float) -> np.ndarray:
-    n = horizon.n_uv
-    return np.array([n[0], n[1], -(n @ horizon.q_uv) - depth])
 
 
 def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
@@ -126,10 +115,9 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         without threshold markings: the pavement's start stands).
     """
     line_left, line_right = left.homogeneous(), right.homogeneous()
-    sd_left = horizon.to_sd(_meet(line_left, _horizon_parallel(horizon, d_pavement)))
-    sd_right = horizon.to_sd(_meet(line_right, _horizon_parallel(horizon, d_pavement)))
-    width_k = float(sd_right[0] - sd_left[0]) / d_pavement
-    k_centre = (0.5 * (sd_left[0] + sd_right[0]) - s0) / d_pavement
+    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_pavement)
+    width_k = float(s_right - s_left) / d_pavement
+    k_centre = (0.5 * (s_left + s_right) - s0) / d_pavement
     fx = horizon.camera.fx
     if not (math.isfinite(width_k) and width_k > 0 and d_pavement > 1.0):
         return None
@@ -144,17 +132,10 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     if d_hi - d_lo < 4.0:
         return None
     depths = np.arange(d_hi, d_lo, -step_d_px)                      # from the pavement's start inwards
-    v2 = horizon.perpendicular_vanishing_point_h(s0)
-    centre = horizon.pencil_point(s0, k_centre, depths)
-    transverse = np.cross(np.concatenate([centre, np.ones((len(depths), 1))], axis=1), v2)
-    ends_left, ends_right = _meet(transverse, line_left), _meet(transverse, line_right)
     # clear of the side stripes (a few per cent of the width) and of the edges' blur
     fractions = np.linspace(0.06, 0.94, n_columns)
-    grid = ends_left[:, None, :] + fractions[None, :, None] * (ends_right - ends_left)[:, None, :]
-    height, width = image.shape
-    finite = np.isfinite(grid).all(axis=-1)
-    inside = finite & (grid[..., 0] >= 0) & (grid[..., 0] <= width - 1) & (grid[..., 1] >= 0) \
-        & (grid[..., 1] <= height - 1)
+    ends_left, ends_right, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths,
+                                                          fractions, image.shape)
     rows_ok = inside.all(axis=1)
     if rows_ok.sum() < 8:
         return None
@@ -216,11 +197,9 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     if kind == "stripes":
         # the threshold 6 m before the stripes
         edge = fx / (fx / edge - STRIPES_FROM_THRESHOLD_WIDTHS * width_k)
-    point = horizon.pencil_point(s0, k_centre, edge)
-    line_h = np.cross(np.array([point[0], point[1], 1.0]), v2)
-    line_h = line_h / np.linalg.norm(line_h[:2])
-    line = TransverseLine(line_h=line_h, corner_left_uv=_meet(line_h, line_left),
-                          corner_right_uv=_meet(line_h, line_right), depth_px=edge,
+    line_h = transverse_line_h(horizon, s0, k_centre, edge)
+    line = TransverseLine(line_h=line_h, corner_left_uv=meet_h(line_h, line_left),
+                          corner_right_uv=meet_h(line_h, line_right), depth_px=edge,
                           step=(band_level - plain_level), significance=math.nan, method=f"marking-{kind}", spans=True)
     return ThresholdMarking(line=line, kind=kind, pavement_widths=float(widths_in))
 
@@ -270,22 +249,15 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
         ``(depth_px, step)`` as above, or None.
     """
     line_left, line_right = left.homogeneous(), right.homogeneous()
-    sd_left = horizon.to_sd(_meet(line_left, _horizon_parallel(horizon, d_from)))
-    sd_right = horizon.to_sd(_meet(line_right, _horizon_parallel(horizon, d_from)))
-    k_centre = (0.5 * (sd_left[0] + sd_right[0]) - s0) / d_from
+    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_from)
+    k_centre = (0.5 * (s_left + s_right) - s0) / d_from
     if not (math.isfinite(k_centre) and math.isfinite(surface_level) and d_to - d_from >= 3.0 * step_d_px):
         return None
     depths = np.arange(d_from + step_d_px, d_to, step_d_px)
-    v2 = horizon.perpendicular_vanishing_point_h(s0)
-    centre = horizon.pencil_point(s0, k_centre, depths)
-    transverse = np.cross(np.concatenate([centre, np.ones((len(depths), 1))], axis=1), v2)
-    ends_left, ends_right = _meet(transverse, line_left), _meet(transverse, line_right)
     parts = (np.linspace(0.15, 0.85, 15), np.linspace(-0.4, -0.15, 6), np.linspace(1.15, 1.4, 6))
     fractions = np.concatenate(parts)
-    grid = ends_left[:, None, :] + fractions[None, :, None] * (ends_right - ends_left)[:, None, :]
-    height, width = image.shape
-    inside = np.isfinite(grid).all(axis=-1) & (grid[..., 0] >= 0) & (grid[..., 0] <= width - 1) \
-        & (grid[..., 1] >= 0) & (grid[..., 1] <= height - 1)
+    _, _, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths, fractions,
+                                         image.shape)
     rows_ok = inside.all(axis=1)
     if rows_ok.sum() < 3:
         return None

@@ -29,11 +29,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from visland.detection.horizon import HorizonFrame
+from visland.detection.horizon import HorizonFrame, meet_h
 from visland.detection.pencil import as_slice, finite_median, rectify, row_mean, row_quantile
-from visland.detection.refine import PixelLine, chroma_of, median_of
+from visland.detection.refine import MAD_TO_SIGMA, PixelLine, chroma_of, median_of
 
-__all__ = ["TransverseLine", "SurfaceExtent", "find_transverse_line", "surface_extent"]
+__all__ = ["TransverseLine", "SurfaceExtent", "find_transverse_line", "surface_extent", "edge_crossings_s",
+           "transverse_grid", "transverse_line_h"]
 
 
 class SurfaceExtent(tuple):
@@ -108,9 +109,9 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     Parameters
     ----------
     image : ndarray of uint8, shape (H, W)
-        Full-resolution grey frame.
+        The grey frame, as the camera took it (full resolution).
     horizon : HorizonFrame
-        The frame's horizon, which sets the (s, d) coordinates.
+        Its horizon: the rows resampled are lines through V1 on it.
     s0 : float
         The runway's vanishing point V1 on the horizon, pixels from Q.
     k_left, k_right : float
@@ -222,10 +223,95 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     return SurfaceExtent(rect.d[lo], rect.d[hi], surface_level)
 
 
-def _meet(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:
-    p = np.cross(line_a, line_b)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return p[..., :2] / p[..., 2:3]
+def edge_crossings_s(horizon: HorizonFrame, line_left: np.ndarray, line_right: np.ndarray,
+                     depth: float) -> tuple[float, float]:
+    """``s`` (pixels along the horizon from Q) where the left and right edges cross the line
+    parallel to the horizon at ``depth`` below it.
+
+    Parameters
+    ----------
+    horizon : HorizonFrame
+        The frame's horizon.
+    line_left, line_right : ndarray, shape (3,)
+        The edges as homogeneous pixel lines.
+    depth : float
+        Depth below the horizon, pixels.
+
+    Returns
+    -------
+    s_left, s_right : float
+    """
+    parallel = horizon.parallel_h(depth)
+    return horizon.to_sd(meet_h(line_left, parallel))[0], horizon.to_sd(meet_h(line_right, parallel))[0]
+
+
+def transverse_line_h(horizon: HorizonFrame, s0: float, k_centre: float, depth: float) -> np.ndarray:
+    """The transverse line through V2 and the centre line's point at ``depth``.
+
+    Parameters
+    ----------
+    horizon, s0, k_centre : HorizonFrame, float, float
+        The frame's horizon, the runway's vanishing point and its centre line's slope, as for
+        :func:`transverse_grid`.
+    depth : float
+        Depth below the horizon (pixels) where the line crosses the centre line.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        Homogeneous pixel line ``a u + b v + c = 0`` with ``(a, b)`` a unit vector.
+    """
+    v2 = horizon.perpendicular_vanishing_point_h(s0)
+    centre_point = horizon.pencil_point(s0, k_centre, depth)
+    line_h = np.cross(np.array([centre_point[0], centre_point[1], 1.0]), v2)
+    return line_h / np.linalg.norm(line_h[:2])
+
+
+def transverse_grid(horizon: HorizonFrame, s0: float, k_centre: float, line_left: np.ndarray,
+                    line_right: np.ndarray, depths: np.ndarray, fractions: np.ndarray, image_shape: tuple):
+    """Sample points across the runway on its transverse lines (module docstring).
+
+    Each transverse line runs through V2 and the centre line's point ``s = s0 + k_centre d`` at
+    one of ``depths``; it is sampled at ``fractions`` of the way from the left edge to the right.
+
+    Parameters
+    ----------
+    horizon : HorizonFrame
+        The frame's horizon.
+    s0 : float
+        The runway's vanishing point V1 on the horizon, pixels from Q.
+    k_centre : float
+        Slope ``ds/dd`` of the centre line.
+    line_left, line_right : ndarray, shape (3,)
+        The edges as homogeneous pixel lines.
+    depths : ndarray, shape (m,)
+        Depths (pixels below the horizon) where the transverse lines cross the centre line.
+    fractions : ndarray, shape (n,)
+        Positions across the runway: 0 on the left edge, 1 on the right one.
+    image_shape : tuple
+        ``(height, width, ...)`` of the frame.
+
+    Returns
+    -------
+    ends_left, ends_right : ndarray, shape (m, 2)
+        Where each transverse line meets the left and right edges (pixels).
+    grid : ndarray, shape (m, n, 2)
+        The sample points (pixels).
+    inside : ndarray of bool, shape (m, n)
+        Which samples are finite and inside the frame (between the centres of its first and
+        last pixels).
+    """
+    v2 = horizon.perpendicular_vanishing_point_h(s0)
+    centre_points = horizon.pencil_point(s0, k_centre, depths)                        # (m, 2)
+    transverse = np.cross(np.concatenate([centre_points, np.ones((len(depths), 1))], axis=1), v2)
+    ends_left = meet_h(transverse, line_left)
+    ends_right = meet_h(transverse, line_right)
+    grid = ends_left[:, None, :] + fractions[None, :, None] * (ends_right - ends_left)[:, None, :]
+    height, width = image_shape[:2]
+    finite = np.isfinite(grid).all(axis=-1)
+    inside = finite & (grid[..., 0] >= 0) & (grid[..., 0] <= width - 1) & (grid[..., 1] >= 0) \
+        & (grid[..., 1] <= height - 1)
+    return ends_left, ends_right, grid, inside
 
 
 def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
@@ -260,9 +346,9 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     Parameters
     ----------
     image : ndarray of uint8, shape (H, W)
-        Full-resolution grey frame.
+        Grey levels of the whole frame.
     horizon : HorizonFrame
-        The frame's horizon.
+        Horizon of the frame (the transverse lines meet it at V2).
     s0 : float
         The runway's vanishing point V1 on the horizon, pixels from Q.
     left, right : PixelLine
@@ -301,24 +387,16 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     d_min, d_max = (float(x) for x in d_window)
     if not (math.isfinite(d_min) and math.isfinite(d_max)) or d_max - d_min < 6 * step_d_px:
         return None
-    v2 = horizon.perpendicular_vanishing_point_h(s0)
     line_left, line_right = left.homogeneous(), right.homogeneous()
     # the centre line: through V1, midway between the edges along lines parallel to the horizon
     d_ref = max(d_expected, 1.0)
-    sd_left = horizon.to_sd(_meet(line_left, _horizon_parallel(horizon, d_ref)))
-    sd_right = horizon.to_sd(_meet(line_right, _horizon_parallel(horizon, d_ref)))
-    k_centre = (0.5 * (sd_left[0] + sd_right[0]) - s0) / d_ref
+    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_ref)
+    k_centre = (0.5 * (s_left + s_right) - s0) / d_ref
     depths = np.arange(d_min, d_max + 1e-9, step_d_px)
-    centre_points = horizon.pencil_point(s0, k_centre, depths)                        # (m, 2)
-    transverse = np.cross(np.concatenate([centre_points, np.ones((len(depths), 1))], axis=1), v2)
-    ends_left = _meet(transverse, line_left)
-    ends_right = _meet(transverse, line_right)
     fractions = np.linspace(0.1, 0.9, n_columns)
-    grid = ends_left[:, None, :] + fractions[None, :, None] * (ends_right - ends_left)[:, None, :]
+    ends_left, ends_right, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths,
+                                                          fractions, image.shape)
     height, width = image.shape
-    finite = np.isfinite(grid).all(axis=-1)
-    inside = finite & (grid[..., 0] >= 0) & (grid[..., 0] <= width - 1) & (grid[..., 1] >= 0) \
-        & (grid[..., 1] <= height - 1)
     rows_ok = inside.mean(axis=1) >= 0.5
     if rows_ok.sum() < 12:
         return None
@@ -330,7 +408,7 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     v1 = int(min(height, math.ceil(v[inside].max()) + 2))
     maps = ((u - u0).astype(np.float32), (v - v0).astype(np.float32))
     inner = max(1.5, 0.01 * d_expected)
-    width_s = abs(sd_right[0] - sd_left[0]) * d_expected / d_ref       # runway width along the horizon at d_expected
+    width_s = abs(s_right - s_left) * d_expected / d_ref       # runway width along the horizon at d_expected
     outer = max(2.5, 0.02 * d_expected, marking_fraction * width_s * d_expected / horizon.camera.fx + 1.0)
     profile_of = functools.partial(_depth_profile, maps=maps, inside=inside, rows_ok=rows_ok)
     # the grey levels on the transverse lines, resampled once: the level and texture profiles
@@ -392,11 +470,9 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
         # window would be a guess (a marking, a pavement joining the runway), so there is none
         return None
     spans = _spans_width(values, inside, rows_ok, fractions, depths, outward, depth, level_profile, texture_profile)
-    centre_point = horizon.pencil_point(s0, k_centre, depth)
-    line_h = np.cross(np.array([centre_point[0], centre_point[1], 1.0]), v2)
-    line_h = line_h / np.linalg.norm(line_h[:2])
-    return TransverseLine(line_h=line_h, corner_left_uv=_meet(line_h, line_left),
-                          corner_right_uv=_meet(line_h, line_right), depth_px=depth,
+    line_h = transverse_line_h(horizon, s0, k_centre, depth)
+    return TransverseLine(line_h=line_h, corner_left_uv=meet_h(line_h, line_left),
+                          corner_right_uv=meet_h(line_h, line_right), depth_px=depth,
                           step=step, significance=significance, method=method, spans=spans)
 
 
@@ -567,7 +643,7 @@ class _StepProfile:
             return []
         x, y = beyond[order], light[order]
         reference_slope, reference_offset = np.polyfit(x[:n_ground], y[:n_ground], 1)
-        texture = 1.4826 * float(median_of(np.abs(y[:n_ground] - (reference_slope * x[:n_ground] + reference_offset))))
+        texture = MAD_TO_SIGMA * float(median_of(np.abs(y[:n_ground] - (reference_slope * x[:n_ground] + reference_offset))))
         trend_samples = max(6, int(round(trend_px / self.step_d_px)))
         # the line through the trend_samples before each sample (sliding least squares from
         # cumulative sums): slope, offset and residual RMS for every candidate at once
@@ -684,7 +760,7 @@ def _step_profile(profile, depths, step_d_px, d_expected, outward) -> _StepProfi
     magnitude = np.abs(g)
 
     def spread(pool):
-        return 1.4826 * float(median_of(np.abs(pool - median_of(pool)))) if pool.size >= 8 else math.inf
+        return MAD_TO_SIGMA * float(median_of(np.abs(pool - median_of(pool)))) if pool.size >= 8 else math.inf
 
     outside = valid & ((depths > d_expected + 2.0) if outward > 0 else (depths < d_expected - 2.0))
     noise = min(spread(magnitude[valid]), spread(magnitude[outside])) + 1e-3
@@ -692,9 +768,3 @@ def _step_profile(profile, depths, step_d_px, d_expected, outward) -> _StepProfi
     light = np.convolve(np.pad(filled, 2, mode="edge"), light_kernel / light_kernel.sum(), mode="valid")
     light = np.where(valid, light, np.nan)
     return _StepProfile(depths, smooth, g, magnitude, noise, step_d_px, d_expected, light, filled)
-
-
-def _horizon_parallel(horizon: HorizonFrame, depth: float) -> np.ndarray:
-    """Homogeneous pixel line parallel to the horizon at ``depth`` below it."""
-    n = horizon.n_uv
-    return np.array([n[0], n[1], -(n @ horizon.q_uv) - depth])
