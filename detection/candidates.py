@@ -95,9 +95,10 @@ def hough_segments(image: np.ndarray, roi: tuple, max_side_px: int, params: Dete
         scale_u = scale_v = 1.0
     if params.blur_sigma_px > 0:
         work = cv2.GaussianBlur(work, (0, 0), params.blur_sigma_px)
-    gx = cv2.Sobel(work[::2, ::2], cv2.CV_32F, 1, 0, ksize=3)
-    gy = cv2.Sobel(work[::2, ::2], cv2.CV_32F, 0, 1, ksize=3)
-    magnitude = np.abs(gx) + np.abs(gy)                      # Canny's L1 gradient, on every other pixel
+    step = params.canny_quantile_step
+    gx = cv2.Sobel(work[::step, ::step], cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(work[::step, ::step], cv2.CV_32F, 0, 1, ksize=3)
+    magnitude = np.abs(gx) + np.abs(gy)                      # Canny's L1 gradient, on every step-th pixel
     low, high = np.quantile(magnitude, [params.canny_low_quantile, params.canny_high_quantile])
     high = max(float(high), params.canny_min_high)
     low = min(max(float(low), params.canny_min_low_ratio * high), high)
@@ -302,12 +303,12 @@ def check_lines(image, horizon: HorizonFrame, lines: CandidateLines, params: Det
         return lines
     n_samples = params.check_samples
     extend = params.check_first_extend
-    span = np.maximum(lines.d_b - lines.d_a, 4.0)
+    span = np.maximum(lines.d_b - lines.d_a, params.check_min_span_px)
     first = _evidence_pass(image, horizon, lines.s0, lines.k, np.maximum(lines.d_a - extend * span, 1.0),
                            lines.d_b + extend * span, params.check_first_band_px, n_samples // 2, params)
     if len(first) == 0:
         return CandidateLines(*(np.zeros(0) for _ in range(5)))
-    span = np.maximum(first[:, 3] - first[:, 2], 4.0)
+    span = np.maximum(first[:, 3] - first[:, 2], params.check_min_span_px)
     second = _evidence_pass(image, horizon, first[:, 0], first[:, 1],
                             np.maximum(first[:, 2] - params.check_extend_far * span, 1.0),
                             first[:, 3] + params.check_extend_near * span, params.check_second_band_px, n_samples,
@@ -327,9 +328,12 @@ def _evidence_pass(image, horizon: HorizonFrame, s0_lines, k_lines, d_lo, d_hi, 
     d = d_lo[:, None] + frac[None, :] * (d_hi - d_lo)[:, None]                     # (n, m)
     centres = horizon.pencil_point(s0_lines[:, None], k_lines[:, None], d).reshape(-1, 2)
     direction, normal = pencil_normal_uv(horizon, np.repeat(k_lines, n_samples))
-    profiles, offsets = sample_profiles(image, centres, normal, direction, halfwidth_px + 6.0)
+    side_px = params.check_transition_side_px
+    # room beyond the band for the grey levels read either side of a transition (and the kernel)
+    profiles, offsets = sample_profiles(image, centres, normal, direction, halfwidth_px + (side_px[1] + 1.0))
     window = np.broadcast_to(np.abs(offsets)[None, :] <= halfwidth_px, profiles.shape)
-    position, strength, net = transition_offsets(profiles, offsets, window)
+    position, strength, net = transition_offsets(profiles, offsets, window, params.check_transition_halfspan_px,
+                                                 side_px)
     contrast_all = (strength / SLOPE_PER_STEP).reshape(n, n_samples)
     step = net.reshape(n, n_samples)
     edge_s = (s0_lines[:, None] + k_lines[:, None] * d) \
@@ -343,7 +347,9 @@ def _evidence_pass(image, horizon: HorizonFrame, s0_lines, k_lines, d_lo, d_hi, 
         ok &= np.sign(step[i]) == polarity
         if ok.sum() < params.check_min_points or polarity == 0:
             continue
-        fit = _robust_pencil_fit(d[i][ok], edge_s[i][ok], contrast_all[i][ok], params.pencil_fit_min_sigma_px)
+        fit = _robust_pencil_fit(d[i][ok], edge_s[i][ok], contrast_all[i][ok], params.pencil_fit_min_sigma_px,
+                                 params.check_fit_iterations, params.check_fit_min_inliers,
+                                 params.fit_weight_cap_percentile)
         if fit is None:
             continue
         s0, k, inlier = fit
@@ -371,7 +377,7 @@ def _evidence_pass(image, horizon: HorizonFrame, s0_lines, k_lines, d_lo, d_hi, 
         if length < params.candidate_min_length_fraction * params.min_edge_length_px:
             continue
         residual = np.abs(edge_s[i][ok][inlier] - (s0 + k * depth_ok)) / math.sqrt(1 + k * k)
-        sigma_px = max(MEDIAN_ABS_TO_SIGMA * float(median_of(residual)), 0.2)
+        sigma_px = max(MEDIAN_ABS_TO_SIGMA * float(median_of(residual)), params.check_line_min_sigma_px)
         spread = max(float(np.std(run)), 1.0)
         # horizon crossing uncertainty: offset and slope errors extrapolated from the run's middle
         sigma_s0 = sigma_px * math.sqrt(1 + k * k) * math.hypot(1.0, 0.5 * (d_a + d_b) / spread) / math.sqrt(len(run))
@@ -379,10 +385,11 @@ def _evidence_pass(image, horizon: HorizonFrame, s0_lines, k_lines, d_lo, d_hi, 
     return np.array(out, dtype=float).reshape(-1, 8)
 
 
-def _robust_pencil_fit(d, s, weights, min_sigma: float, iterations: int = 5):
-    """Fit ``s = s0 + k d`` with Tukey re-weighting (robust scale floored at ``min_sigma``);
-    returns (s0, k, inlier mask) or None."""
-    w0 = np.minimum(weights, np.percentile(weights, 90))
+def _robust_pencil_fit(d, s, weights, min_sigma: float, iterations: int, min_inliers: int, weight_cap_percentile: float):
+    """Fit ``s = s0 + k d`` with Tukey re-weighting (robust scale floored at ``min_sigma``, weights
+    capped at their ``weight_cap_percentile``); returns (s0, k, inlier mask), or None with fewer
+    than ``min_inliers`` inliers."""
+    w0 = np.minimum(weights, np.percentile(weights, weight_cap_percentile))
     w = w0.copy()
     A = np.stack([np.ones_like(d), d], axis=1)
     coef = None
@@ -399,7 +406,7 @@ def _robust_pencil_fit(d, s, weights, min_sigma: float, iterations: int = 5):
         u = r / (TUKEY_C * scale)
         w = w0 * np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
     inlier = w > 0
-    if inlier.sum() < 4:
+    if inlier.sum() < min_inliers:
         return None
     return float(coef[0]), float(coef[1]), inlier
 

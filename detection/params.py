@@ -75,6 +75,8 @@ NOT_SCALED_PX = (
     "crossing_min_sigma_px", "pencil_fit_min_sigma_px", "duplicate_gap_px", "pencil_step_halfspan_px",
     "pencil_join_tolerance_px", "refine_min_band_px", "max_line_residual_px", "reference_side_px",
     "reference_focal_px",
+    # candidate lines' sub-pixel profile lengths and floors (candidates)
+    "check_min_span_px", "check_transition_halfspan_px", "check_transition_side_px", "check_line_min_sigma_px",
     # the measurement's sub-pixel floors, blur and resolution limits (detector)
     "edge_band_min_px", "edge_image_margin_px", "edge_blur_px", "chroma_resolved_stripe_px", "vp_line_min_sigma_px",
     "centre_band_min_px", "centre_min_width_px", "confidence_residual_px",
@@ -145,6 +147,22 @@ class DetectorParams(ParamsFile):
         A candidate line's supported run has no gap longer than this fraction of the span sampled.
     crossing_min_sigma_px : float
         Floor of a candidate line's horizon-crossing uncertainty.
+    canny_quantile_step : int
+        The Canny thresholds' gradient quantiles are read on every this-many-th pixel of the
+        working image, each way (their cost).
+    check_min_span_px : float
+        A candidate line's span is taken as at least this (pixels of depth) when it is extended.
+    check_transition_halfspan_px, check_transition_side_px : float, tuple of 2 float
+        A transition across a candidate line is centred on its gradient within the first of the
+        strongest, its net step read between the second's distances either side
+        (:func:`refine.transition_offsets`).
+    check_fit_iterations, check_fit_min_inliers : int
+        Re-weighting passes of a candidate line's robust re-fit, and the fewest inliers it keeps.
+    check_line_min_sigma_px : float
+        Floor of a candidate line's robust residual scale.
+    fit_weight_cap_percentile : float
+        Edge strengths weighting a line fit are capped at this percentile of theirs (a few very
+        strong points do not decide alone; candidate lines and refinement).
     pencil_fit_min_sigma_px : float
         Floor of the robust scale when a candidate line ``s = s0 + k d`` is re-fitted.
     duplicate_gap_px : float
@@ -494,6 +512,14 @@ class DetectorParams(ParamsFile):
     crossing_min_sigma_px: float = 0.3
     pencil_fit_min_sigma_px: float = 0.3
     duplicate_gap_px: float = 1.0
+    canny_quantile_step: int = 2
+    check_min_span_px: float = 4.0
+    check_transition_halfspan_px: float = 2.0
+    check_transition_side_px: tuple = (2.5, 5.0)
+    check_fit_iterations: int = 5
+    check_fit_min_inliers: int = 4
+    check_line_min_sigma_px: float = 0.2
+    fit_weight_cap_percentile: float = 90.0
     # --- vanishing points and the trapezoid model (trapezoid, pencil)
     max_edge_slope: float = 4.0
     vp_tolerance_px: float = 8.0
@@ -664,6 +690,10 @@ class DetectorParams(ParamsFile):
         "check_min_points": (3, 1000, "int"), "check_min_run_points": (2, 1000, "int"),
         "check_max_gap_fraction": (0.0, 1.0, "open"), "crossing_min_sigma_px": (0.0, 100.0),
         "pencil_fit_min_sigma_px": (0.01, 100.0), "duplicate_gap_px": (0.0, 100.0),
+        "canny_quantile_step": (1, 16, "int"), "check_min_span_px": (0.5, 1000.0),
+        "check_transition_halfspan_px": (0.5, 100.0), "check_transition_side_px": (0.5, 100.0),
+        "check_fit_iterations": (1, 50, "int"), "check_fit_min_inliers": (3, 1000, "int"),
+        "check_line_min_sigma_px": (0.01, 100.0), "fit_weight_cap_percentile": (1.0, 100.0),
         "max_edge_slope": (0.1, 100.0), "vp_tolerance_px": (0.1, 1000.0), "vp_min_line_support": (0.0, 1.0),
         "vp_line_weight_max_px": (1.0, 100000.0), "vp_sigma_factor": (0.0, 100.0),
         "vp_points_acquisition": (1, 100, "int"), "vp_points_tracking": (1, 100, "int"),

@@ -740,7 +740,8 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         if keep.sum() < 3:
             return NoFit(f"no consistent step along the line ({why})")
         points = centres + position[:, None] * current.normal
-        weights = np.where(keep, np.minimum(strength, np.percentile(strength[keep], 90)), 0.0)
+        weights = np.where(keep, np.minimum(strength, np.percentile(strength[keep], params.fit_weight_cap_percentile)),
+                           0.0)
         fitted = fit_line(points, weights)
         if fitted is None:
             return NoFit(f"no line through the edge points ({why})")
