@@ -680,8 +680,8 @@ def _centre_line(ctx: _Context, pair: _EdgePair, polarity_hint: int) -> tuple[Li
     d_mid = pair.d_mid
     k_centre = 0.5 * ((pair.s0_left + pair.k_left * d_mid - s0) + (pair.s0_right + pair.k_right * d_mid - s0)) / d_mid
     centre_fit = _refine_centre(ctx, s0, k_centre, pair.k_left, pair.k_right, pair.d_far, pair.d_near, polarity_hint)
-    if centre_fit is None:
-        return None, "centre line not found"
+    if not centre_fit:
+        return None, f"centre line not found ({centre_fit.reason})"
     s0_centre, _, sigma_s0_centre_px = _pencil_of(horizon, centre_fit)
     sigma_edges_px = min(pair.sigma_s0_left_px, pair.sigma_s0_right_px)
     if abs(s0_centre - s0) > params.vp_tolerance_px + params.edge_crossing_sigmas * math.hypot(sigma_s0_centre_px,
@@ -850,8 +850,9 @@ def _confidence(params: DetectorParams, pair: _EdgePair, centre_fit: LineFit | N
     return confidence, None
 
 
-def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, polarity_hint: int) -> LineFit | None:
-    """The centre line (a painted stripe, often dashed) midway between the edges."""
+def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, polarity_hint: int) -> LineFit | NoFit:
+    """The centre line (a painted stripe, often dashed) midway between the edges, or why it was
+    not found (for each stripe polarity tried)."""
     horizon, params = ctx.horizon, ctx.params
     line = _pencil_pixel_line(horizon, s0, k_centre, 0.5 * (d_far + d_near))
     scale = math.sqrt(1 + k_centre * k_centre)
@@ -860,7 +861,7 @@ def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, 
     img_lo, img_hi = _image_span(line, ctx.camera.width, ctx.camera.height, params.centre_image_margin_px)
     t_lo, t_hi = max(t_lo, img_lo), min(t_hi, img_hi)
     if not (math.isfinite(t_lo) and math.isfinite(t_hi)) or t_hi - t_lo < params.min_edge_length_px:
-        return None
+        return NoFit(f"it lies in the image over less than {params.min_edge_length_px:.0f} px")
     width_near = abs(k_right - k_left) * d_near / scale
     halfwidth = float(np.clip(params.centre_band_fraction * width_near, params.centre_band_min_px,
                               params.search_halfwidth_px * params.centre_band_max_factor))
@@ -871,19 +872,28 @@ def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, 
                           params.centre_min_width_px)
 
     best = None
+    reasons = []
     for polarity in ((polarity_hint,) if polarity_hint else (1, -1)):
         fit = refine_line(ctx.image, line, (t_lo, t_hi), "stripe", polarity=polarity, halfwidth_px=halfwidth,
                           stripe_width_px=stripe_width, params=params,
                           iterations=max(1, params.refine_iterations - 1))
-        if not fit or fit.residual_px > params.max_line_residual_px:
+        stripe = "bright stripe" if polarity > 0 else "dark stripe"
+        if not fit:
+            reasons.append(f"{stripe}: {fit.reason}")
             continue
-        if (fit.extent[1] - fit.extent[0]) < params.min_edge_length_px or fit.support < params.centre_min_support:
+        if fit.residual_px > params.max_line_residual_px:
+            reasons.append(f"{stripe}: not straight (RMS residual {fit.residual_px:.2f} px)")
+            continue
+        length = fit.extent[1] - fit.extent[0]
+        if length < params.min_edge_length_px or fit.support < params.centre_min_support:
+            reasons.append(f"{stripe}: supported over {length:.0f} px by {100 * fit.support:.0f} % of its profiles "
+                           f"(< {params.min_edge_length_px:g} px or {100 * params.centre_min_support:.0f} %)")
             continue
         if best is None or fit.n_inliers > best.n_inliers:
             best = fit
         if best is not None and best.support >= params.centre_bright_support:
             break            # a painted line is white: the dark try only if the bright one fails
-    return best
+    return best if best is not None else NoFit(" / ".join(reasons))
 
 
 def _depth_leaving_image(horizon: HorizonFrame, s0: float, k: float, d_from: float, d_to: float,

@@ -112,3 +112,16 @@ def test_colour_places_the_threshold_and_edges_where_grey_levels_cannot(name, di
     # in grey levels the blended stripes have the grass's level, so only their texture (longitudinal
     # stripes alternating with the surface across the runway) tells where the runway starts
     assert errors["grey"] < 1.5
+
+
+def test_a_centre_line_too_thin_to_see_says_why_it_is_missing():
+    # thesis-1 at 4 km on a 512 px frame: the 0.9 m centre stripe (ICAO, 45 m runway) spans
+    # fx * 0.9 / 4000 = 0.14 px, a few grey levels at most after blur: the edges are found, the
+    # centre line is not, and the measurement row says why (not only that it is missing)
+    image, camera, state, _ = frame("thesis-1", 4000.0)
+    assert camera.fx * 0.9 / 4000.0 < 0.2
+    result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    assert result.found, result.reason
+    assert math.isnan(result.lines["center"][0])
+    row = result.to_measurement_row(frame=0, t_s=0.0)
+    assert "centre line not found (bright stripe: no consistent step along the line" in row["reason"], row["reason"]
