@@ -51,6 +51,8 @@ CONDITIONS = {
                              None),
     "urban": ((3000.0, 45.0), {"surroundings": "urban"}, None),
     "taxiways near threshold": ((3000.0, 45.0), {"taxiways": "near_threshold", "second_runway": True}, None),
+    "oblique taxiways": ((3000.0, 45.0), {"taxiways": "oblique"}, None),
+    "oblique, 1200x23": ((1200.0, 23.0), {"taxiways": "oblique", "surface": "concrete"}, None),
     "visibility 2 km": ((3000.0, 45.0), {"visibility_m": 2000.0}, None),
     "overcast, 5 km": ((3000.0, 45.0), {"lighting": "overcast", "visibility_m": 5000.0}, None),
     "dusk, sun ahead 6 deg": ((3000.0, 45.0), {"lighting": "dusk", "sun_elevation_deg": 6.0,
@@ -160,6 +162,7 @@ def main(argv=None) -> int:
     parser.add_argument("--scenario", default="thesis-3")
     parser.add_argument("--out", default="/tmp/detection_robustness.csv", help="per-frame CSV")
     parser.add_argument("--figure", help="heat map PNG")
+    parser.add_argument("--save-frames", metavar="DIR", help="also write each rendered frame there (PNG)")
     parser.add_argument("--from-csv", metavar="CSV", help="summarise a per-frame CSV of an earlier run (no rendering)")
     args = parser.parse_args(argv)
     if args.from_csv:
@@ -205,6 +208,12 @@ def main(argv=None) -> int:
             with FrameRenderer(scene, camera, runway) as renderer:
                 for j, index in enumerate(chosen):
                     rgb = renderer.render(states.p_runway_m[j], R[j], frame_seed=index)
+                    if args.save_frames:
+                        import cv2
+                        os.makedirs(args.save_frames, exist_ok=True)
+                        stem = "".join(ch if ch.isalnum() else "_" for ch in name)
+                        cv2.imwrite(os.path.join(args.save_frames, f"{stem}_{int(args.distances[j])}.png"),
+                                    cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR) if rgb.ndim == 3 else rgb)
                     result = detect_runway(rgb, camera, float(states.roll_rad[j]), float(states.pitch_rad[j]),
                                            params=params, previous=None)
                     errors = frame_errors(result, camera, labels.corners_uv[j], labels.corners_visible[j],

@@ -28,8 +28,10 @@ SURROUNDINGS = ("green", "dry", "sand", "snow", "urban")
 LIGHTING = ("day", "overcast", "dusk")
 #: Taxiway layouts: ``standard`` (parallel taxiway on the right, connectors far from the
 #: threshold), ``near_threshold`` (also connectors within 300 m of the threshold on both sides
-#: and a parallel taxiway on the left), ``none`` (no taxiways, apron or buildings).
-TAXIWAYS = ("standard", "near_threshold", "none")
+#: and a parallel taxiway on the left), ``oblique`` (parallel taxiways on both sides joined by
+#: taxiways at 30-45 deg, two of them within 200 m of the threshold), ``none`` (no taxiways,
+#: apron or buildings).
+TAXIWAYS = ("standard", "near_threshold", "none", "oblique")
 #: ``realistic``: textured scene; ``flat``: flat colours for label checks (white runway,
 #: black ground and sky, no markings, no haze, no noise).
 STYLES = ("realistic", "flat")

@@ -7,14 +7,21 @@ Layout (runway frame R, metres; W, L the runway's width and length):
 - a parallel taxiway on the right at ``4 W + 2.5`` m from the centre line (182.5 m for a 45 m
   runway, ICAO code E) joined to the runway by three connectors (none near the threshold, so
   the threshold corners stay clean), an apron and buildings beyond it;
+- with ``taxiways="oblique"``: a parallel taxiway on each side, joined to the runway by taxiways
+  at an angle (rapid exits at 45 deg within 200 m of the threshold and at 30 deg at 0.4 L on
+  the right, at 35 deg 120 m past the threshold on the left; :class:`ObliqueStrip`);
 - two roads (one parallel on the left, one crossing 1.4 km before the threshold);
 - fields and woods around mown airport grass out to 60 km; a sky dome that follows the camera.
 
 Depth precision: every ground surface lies in the plane z = 0 and **no two surfaces overlap**.
 The ground is one tensor grid whose lines pass through every edge of every paved area; each
 cell belongs to exactly one surface and neighbouring cells share their vertices, so there is
-nothing to z-fight and no crack at any distance. Markings are painted into the runway
-textures, not stacked as geometry. Only buildings and the sky use depth, far apart.
+nothing to z-fight and no crack at any distance. A taxiway at an angle is cut out of the ground
+cells it crosses (:func:`_split_cell`): its corners are grid points, its two ends lie on grid
+lines (the runway's and the parallel taxiway's edges), and where a slanted side crosses a grid
+line both cells on that line get the same vertex, computed from the side and the line alone, so
+the no-crack rule holds there too. Markings are painted into the runway textures, not stacked
+as geometry. Only buildings and the sky use depth, far apart.
 """
 from __future__ import annotations
 
@@ -29,7 +36,8 @@ from .markings import runway_markings
 from .params import SceneParams
 from . import textures
 
-__all__ = ["AirportLayout", "airport_layout", "build_scene", "SceneHandles", "GROUND_EXTENT_M", "SKY_RADIUS_M"]
+__all__ = ["AirportLayout", "ObliqueStrip", "airport_layout", "build_scene", "SceneHandles", "GROUND_EXTENT_M",
+           "SKY_RADIUS_M"]
 
 GROUND_EXTENT_M = 60000.0
 SKY_RADIUS_M = 120000.0
@@ -53,6 +61,51 @@ class Region:
 
 
 @dataclass(frozen=True)
+class ObliqueStrip:
+    """A taxiway joining the runway at an angle: a parallelogram whose two ends lie on lines of
+    constant y (the runway's edge and the parallel taxiway's), runway frame R, metres.
+
+    Attributes
+    ----------
+    name : str
+        For the layout's listing.
+    corners : tuple
+        Four ``(x, y)``: the runway end's two corners, then the far end's, in the order
+        ``(near_a, near_b, far_b, far_a)`` (``a`` on the side of smaller x).
+    width_m : float
+        Width across the strip.
+    material : str, default "taxiway"
+        Strip texture (:func:`visland.render.textures.strip_texture`).
+    """
+
+    name: str
+    corners: tuple
+    width_m: float
+    material: str = "taxiway"
+
+    @classmethod
+    def joining(cls, name: str, x_join_m: float, side: int, angle_deg: float, y_near_m: float, y_far_m: float,
+                width_m: float) -> "ObliqueStrip":
+        """The strip leaving the line ``y = y_near_m`` at ``x_join_m`` (centre of its mouth) at
+        ``angle_deg`` from the runway's axis towards +x, until ``y = y_far_m``; ``side`` is the sign
+        of y (+1 right, -1 left), ``y_*`` are distances from the centre line (positive)."""
+        angle = math.radians(angle_deg)
+        half_mouth = 0.5 * width_m / math.sin(angle)                 # the mouth cut along y = const
+        run = (y_far_m - y_near_m) / math.tan(angle)                 # x travelled from one end to the other
+        near_y, far_y = side * y_near_m, side * y_far_m
+        corners = ((x_join_m - half_mouth, near_y), (x_join_m + half_mouth, near_y),
+                   (x_join_m + run + half_mouth, far_y), (x_join_m + run - half_mouth, far_y))
+        return cls(name, corners, float(width_m))
+
+    def axis_and_normal(self) -> tuple[np.ndarray, np.ndarray]:
+        """Unit vectors along the strip (from the runway outwards) and across it, (2,) each."""
+        c = np.asarray(self.corners, dtype=float)
+        along = 0.5 * (c[2] + c[3]) - 0.5 * (c[0] + c[1])
+        along /= np.linalg.norm(along)
+        return along, np.array([-along[1], along[0]])
+
+
+@dataclass(frozen=True)
 class AirportLayout:
     """Paved regions (highest priority wins a grid cell) and buildings, in the runway frame R.
 
@@ -66,12 +119,15 @@ class AirportLayout:
         ``(x0, x1, y0, y1)`` of the mown airport grass, metres.
     runway_tile_edges_m : ndarray, shape (n_tiles + 1,)
         Where the runway's texture tiles start and end along x, metres.
+    oblique : tuple of ObliqueStrip, default ()
+        Taxiways at an angle, cut out of the ground.
     """
 
     regions: tuple
     buildings: tuple
     grass_rect: tuple
     runway_tile_edges_m: np.ndarray
+    oblique: tuple = ()
 
 
 def airport_layout(runway: Runway, distractors: bool = True, taxiways: str = "standard", second_runway: bool = False,
@@ -91,7 +147,7 @@ def airport_layout(runway: Runway, distractors: bool = True, taxiways: str = "st
     distractors : bool, default True
         Taxiways, apron, buildings and roads around the runway (False: the runway alone).
     taxiways : str, default "standard"
-        ``standard``, ``near_threshold`` or ``none``.
+        ``standard``, ``near_threshold``, ``oblique`` or ``none``.
     second_runway : bool, default False
         Add the parallel runway.
     pre_threshold_m : float, default 0
@@ -122,23 +178,34 @@ def airport_layout(runway: Runway, distractors: bool = True, taxiways: str = "st
         regions.append(Region("road_parallel", (-GROUND_EXTENT_M, GROUND_EXTENT_M, -650.0 - road_w / 2 + min(0.0, grass_y0 + 330.0),
                                                 -650.0 + road_w / 2 + min(0.0, grass_y0 + 330.0)), "road", 20, "x", road_w))
         return AirportLayout(tuple(regions), (), (grass_x0, L + 450.0, grass_y0, 330.0), tile_edges)
+    oblique = []
     if distractors:
-        if taxiways == "near_threshold":
+        if taxiways in ("near_threshold", "oblique"):
             sep = 4.0 * W + 2.5
             tw = min(23.0, 0.5 * W + 0.5)
             regions.append(Region("left_parallel_taxiway", (60.0, L - 40.0, -sep - tw / 2, -sep + tw / 2), "taxiway",
                                   50, "x", tw))
-            regions.append(Region("connector_near_right", (90.0 - tw / 2, 90.0 + tw / 2, W / 2, sep - tw / 2),
-                                  "taxiway", 40, "y", tw))
-            regions.append(Region("connector_near_left", (230.0 - tw / 2, 230.0 + tw / 2, -sep + tw / 2, -W / 2),
-                                  "taxiway", 40, "y", tw))
+            if taxiways == "near_threshold":
+                regions.append(Region("connector_near_right", (90.0 - tw / 2, 90.0 + tw / 2, W / 2, sep - tw / 2),
+                                      "taxiway", 40, "y", tw))
+                regions.append(Region("connector_near_left", (230.0 - tw / 2, 230.0 + tw / 2, -sep + tw / 2, -W / 2),
+                                      "taxiway", 40, "y", tw))
             regions.append(Region("connector_far_left", (L - 60.0 - tw / 2, L - 60.0 + tw / 2, -sep + tw / 2, -W / 2),
                                   "taxiway", 40, "y", tw))
         sep = 4.0 * W + 2.5
         tw = min(23.0, 0.5 * W + 0.5)
         t_in, t_out = sep - tw / 2, sep + tw / 2
         regions.append(Region("parallel_taxiway", (60.0, L - 40.0, t_in, t_out), "taxiway", 50, "x", tw))
-        for k, x_c in enumerate((0.28 * L, 0.52 * L, L - 60.0)):
+        if taxiways == "oblique":
+            # rapid exits instead of the two first right-angle connectors; they end on the
+            # parallel taxiways' inner edges, so each crosses nothing but ground
+            oblique = [ObliqueStrip.joining("oblique_near_right", min(200.0, 0.15 * L), +1, 45.0, W / 2, t_in, tw),
+                       ObliqueStrip.joining("oblique_exit_right", 0.4 * L, +1, 30.0, W / 2, t_in, tw),
+                       ObliqueStrip.joining("oblique_near_left", min(120.0, 0.1 * L), -1, 35.0, W / 2, t_in, tw)]
+            connectors = (L - 60.0,)
+        else:
+            connectors = (0.28 * L, 0.52 * L, L - 60.0)
+        for k, x_c in enumerate(connectors):
             regions.append(Region(f"connector_{k}", (x_c - tw / 2, x_c + tw / 2, W / 2, t_in), "taxiway", 40, "y", tw))
         a_x0, a_x1 = 0.36 * L, 0.60 * L
         a_y0, a_y1 = t_out + 45.0, t_out + 245.0
@@ -167,7 +234,7 @@ def airport_layout(runway: Runway, distractors: bool = True, taxiways: str = "st
         grass_rect = (grass_x0, L + 450.0, grass_y0, a_y1 + 140.0)
     else:
         grass_rect = (grass_x0, L + 450.0, grass_y0, 330.0)
-    return AirportLayout(tuple(regions), tuple(buildings), grass_rect, tile_edges)
+    return AirportLayout(tuple(regions), tuple(buildings), grass_rect, tile_edges, tuple(oblique))
 
 
 @dataclass
@@ -211,6 +278,9 @@ def _grid_edges(layout: AirportLayout) -> tuple[np.ndarray, np.ndarray]:
         x0, x1, y0, y1 = region.rect
         xs |= {x0, x1}
         ys |= {y0, y1}
+    for strip in layout.oblique:
+        xs |= {float(x) for x, _ in strip.corners}
+        ys |= {float(y) for _, y in strip.corners}
     xs |= set(layout.runway_tile_edges_m.tolist())
     # a ring of breakpoints keeps the large ground triangles moderate near the airport
     for r in (1000.0, 2500.0, 5000.0, 10000.0, 20000.0, 40000.0):
@@ -253,6 +323,116 @@ def _quads_mesh(cells, uv_of):
     return trimesh.Trimesh(vertices=vertices, faces=faces, visual=visual, process=False)
 
 
+def _crossing(a, b, p, q):
+    """Where the segment ``a``-``b`` meets the line through ``p`` and ``q`` (2-D points). A segment
+    along a grid line (x or y constant) gets the point computed from the line and that grid
+    coordinate alone, so the two cells that share the grid line get the same vertex (no crack)."""
+    if a[0] == b[0]:
+        return (a[0], p[1] + (a[0] - p[0]) * (q[1] - p[1]) / (q[0] - p[0]))
+    if a[1] == b[1]:
+        return (p[0] + (a[1] - p[1]) * (q[0] - p[0]) / (q[1] - p[1]), a[1])
+    d = (b[0] - a[0], b[1] - a[1])
+    e = (q[0] - p[0], q[1] - p[1])
+    t = ((p[0] - a[0]) * e[1] - (p[1] - a[1]) * e[0]) / (d[0] * e[1] - d[1] * e[0])
+    return (a[0] + t * d[0], a[1] + t * d[1])
+
+
+def _clip(polygon, p, q, sign: float):
+    """The part of the convex ``polygon`` (list of (x, y)) where ``sign * cross(q - p, v - p) >= 0``."""
+    def side(v):
+        return sign * ((q[0] - p[0]) * (v[1] - p[1]) - (q[1] - p[1]) * (v[0] - p[0]))
+    out = []
+    for k, a in enumerate(polygon):
+        b = polygon[(k + 1) % len(polygon)]
+        sa, sb = side(a), side(b)
+        if sa >= 0:
+            out.append(a)
+        if (sa > 0 > sb) or (sa < 0 < sb):
+            out.append(_crossing(a, b, p, q))
+    return out
+
+
+def _area(polygon) -> float:
+    x = np.array([v[0] for v in polygon])
+    y = np.array([v[1] for v in polygon])
+    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+
+
+def _split_cell(polygon, strip: ObliqueStrip) -> tuple[list, list]:
+    """``(inside, outside)`` convex pieces of the convex ground ``polygon`` cut by ``strip``'s two
+    slanted sides (its ends lie on grid lines, so a grid cell is wholly inside or outside their
+    band). Pieces of no area are dropped."""
+    c = strip.corners
+    centre = tuple(np.mean(np.asarray(c, dtype=float), axis=0))
+    sides = [(c[0], c[3]), (c[1], c[2])]
+    signs = []
+    for p, q in sides:
+        value = (q[0] - p[0]) * (centre[1] - p[1]) - (q[1] - p[1]) * (centre[0] - p[0])
+        signs.append(1.0 if value > 0 else -1.0)
+    (pa, qa), (pb, qb) = sides
+    outside = [_clip(polygon, pa, qa, -signs[0])]
+    between = _clip(polygon, pa, qa, signs[0])
+    outside.append(_clip(between, pb, qb, -signs[1]))
+    inside = _clip(between, pb, qb, signs[1])
+    keep = [piece for piece in outside if len(piece) >= 3 and _area(piece) > 1e-6]
+    return ([inside] if len(inside) >= 3 and _area(inside) > 1e-6 else []), keep
+
+
+def _polygons_mesh(polygons, uv_of):
+    """trimesh of convex polygons at z = 0 (fans), UVs ``uv_of(x, y) -> (s, t)``; the same winding
+    as :func:`_quads_mesh` (normal up, -z)."""
+    import trimesh
+    vertices, faces = [], []
+    for polygon in polygons:
+        base = len(vertices)
+        ring = list(polygon)
+        if _signed_area(ring) < 0:
+            ring = ring[::-1]
+        vertices.extend(ring)
+        faces.extend([base, base + k + 1, base + k] for k in range(1, len(ring) - 1))
+    v = np.asarray(vertices, dtype=float).reshape(-1, 2)
+    vertices3 = np.column_stack([v, np.zeros(len(v))])
+    visual = None
+    if uv_of is not None:
+        visual = trimesh.visual.TextureVisuals(uv=np.stack(uv_of(v[:, 0], v[:, 1]), axis=1))
+    return trimesh.Trimesh(vertices=vertices3, faces=np.asarray(faces, dtype=int).reshape(-1, 3), visual=visual,
+                           process=False)
+
+
+def _signed_area(ring) -> float:
+    return 0.5 * sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(ring, ring[1:] + ring[:1]))
+
+
+def _ground_and_oblique(ground_cells, layout: AirportLayout):
+    """The ground cells untouched by the oblique strips, the ground pieces they leave, and the
+    strips' own pieces by strip: ``(cells, ground_polygons, {strip index: polygons})``."""
+    if not layout.oblique:
+        return ground_cells, [], {}
+    keep = np.ones(len(ground_cells), dtype=bool)
+    ground_polygons, strip_polygons = [], {}
+    for k, strip in enumerate(layout.oblique):
+        c = np.asarray(strip.corners, dtype=float)
+        x0, x1, y0, y1 = c[:, 0].min(), c[:, 0].max(), c[:, 1].min(), c[:, 1].max()
+        hit = keep & (ground_cells[:, 0] < x1) & (ground_cells[:, 1] > x0) & (ground_cells[:, 2] < y1) \
+            & (ground_cells[:, 3] > y0)
+        pieces = [[(a, c_), (b, c_), (b, d), (a, d)] for a, b, c_, d in ground_cells[hit]]
+        keep &= ~hit
+        # pieces other strips left behind may lie in this strip's band too
+        pieces += [g for g in ground_polygons if _bbox_overlaps(g, x0, x1, y0, y1)]
+        ground_polygons = [g for g in ground_polygons if not _bbox_overlaps(g, x0, x1, y0, y1)]
+        for piece in pieces:
+            inside, outside = _split_cell(piece, strip)
+            strip_polygons.setdefault(k, []).extend(inside)
+            ground_polygons.extend(outside)
+    return ground_cells[keep], ground_polygons, strip_polygons
+
+
+def _bbox_overlaps(polygon, x0, x1, y0, y1) -> bool:
+    xs = [v[0] for v in polygon]
+    ys = [v[1] for v in polygon]
+    return min(xs) < x1 and max(xs) > x0 and min(ys) < y1 and max(ys) > y0
+
+
 def _add(scene, mesh):
     """Add ``mesh`` under a name recording the order of addition (the renderer draws in name order)."""
     return scene.add(mesh, name=f"{len(scene.mesh_nodes):04d}")
@@ -293,7 +473,7 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
     owners = owner[rows, cols]
 
     # ------------------------------------------------------------ ground (fields and grass)
-    ground_cells = all_cells[owners == -1]
+    ground_cells, ground_polygons, oblique_polygons = _ground_and_oblique(all_cells[owners == -1], layout)
     if flat:
         ground_material = _material(kind=3, colour=(0.0, 0.0, 0.0))
         _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, None), material=ground_material))
@@ -309,7 +489,10 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
 
         ground_material = _material(_texture(fields, _REPEAT), _texture(grass, _REPEAT, trilinear=False), 1.0 / 16.0,
                                     0.8)
-        _add(scene, pyrender.Mesh.from_trimesh(_quads_mesh(ground_cells, ground_uv), material=ground_material))
+        ground = _quads_mesh(ground_cells, ground_uv)
+        if ground_polygons:
+            ground = trimesh.util.concatenate([ground, _polygons_mesh(ground_polygons, ground_uv)])
+        _add(scene, pyrender.Mesh.from_trimesh(ground, material=ground_material))
 
     # ------------------------------------------------------------ runway tiles
     runway_index = [k for k, r in enumerate(layout.regions) if r.material == "runway"][0]
@@ -396,6 +579,23 @@ def build_scene(runway: Runway, params: SceneParams) -> SceneHandles:
         mesh = trimesh.util.concatenate(meshes)
         material = _material(_texture(strip_textures[material_name], _REPEAT), detail_pavement, 1.0 / 8.0, 0.6, kind=4)
         _add(scene, pyrender.Mesh.from_trimesh(mesh, material=material))
+
+    # ------------------------------------------------------------ taxiways at an angle
+    for k, polygons in oblique_polygons.items():
+        strip = layout.oblique[k]
+        along, across = strip.axis_and_normal()
+        mouth = 0.5 * (np.asarray(strip.corners[0], dtype=float) + np.asarray(strip.corners[1], dtype=float))
+        period = 12.0
+        image = textures.strip_texture(strip.material, strip.width_m, np.random.default_rng([params.seed, 11, k]),
+                                       0.08, period)
+
+        def oblique_uv(x, y, along=along, across=across, mouth=mouth, width=strip.width_m):
+            dx, dy = x - mouth[0], y - mouth[1]
+            # the mouth is cut along the runway edge: measure across from the strip's centre line
+            return (dx * along[0] + dy * along[1]) / period, (dx * across[0] + dy * across[1]) / width + 0.5
+
+        material = _material(_texture(image, _REPEAT), detail_pavement, 1.0 / 8.0, 0.6, kind=4)
+        _add(scene, pyrender.Mesh.from_trimesh(_polygons_mesh(polygons, oblique_uv), material=material))
 
     # ------------------------------------------------------------ buildings
     max_height = 0.0

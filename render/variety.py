@@ -3,7 +3,7 @@
 :func:`draw_variety` is the one place where the ranges live (issue 11): runway 1200-4000 m by
 23-60 m; marking sets (ICAO with 4-16 threshold stripes, FAA, worn, none, displaced threshold,
 blast pad), side stripes or not; asphalt, concrete or patched pavement; green, dry, sand, snow
-or urban surroundings; taxiways (standard, near the threshold, none), a second runway; sun
+or urban surroundings; taxiways (standard, near the threshold, at an angle, none), a second runway; sun
 from 5 deg to overhead, overcast or dusk; visibility 1.5-30 km (log-uniform); colour or
 monochrome sensor, noise, blur, vignetting and JPEG compression. The same seed gives the same
 draw on every machine (``numpy.random.default_rng([seed, 0x5CE7E])``, values rounded).
@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .params import LIGHTING, MARKINGS, SURROUNDINGS, TAXIWAYS, SceneParams
+from .params import LIGHTING, MARKINGS, SURROUNDINGS, SceneParams
 
 __all__ = ["Variety", "draw_variety", "RUNWAY_LENGTH_RANGE_M", "RUNWAY_WIDTH_RANGE_M"]
 
@@ -79,7 +79,7 @@ def draw_variety(seed: int, base: SceneParams | None = None) -> Variety:
         rubber_deposits=round(float(rng.uniform(0.0, 1.0)), 3),
         pre_threshold_m=round(float(rng.uniform(60.0, 400.0)), 1),
         surroundings=str(rng.choice(SURROUNDINGS)),
-        taxiways=str(rng.choice(TAXIWAYS, p=[0.4, 0.45, 0.15])),
+        taxiways=str(rng.choice(("standard", "near_threshold", "none"), p=[0.4, 0.45, 0.15])),
         second_runway=bool(rng.random() < 0.3),
         lighting=lighting,
         sun_azimuth_deg=round(float(rng.uniform(0.0, 360.0)) % 360.0, 2),
@@ -92,6 +92,9 @@ def draw_variety(seed: int, base: SceneParams | None = None) -> Variety:
         vignetting=round(float(rng.choice([0.0, rng.uniform(0.1, 0.5)])), 3),
         jpeg_quality=int(rng.choice([0, 0, int(rng.integers(40, 96))])),
     )
+    # drawn last, so that every draw above stays what it was before taxiways at an angle existed
+    if values["taxiways"] in ("standard", "near_threshold") and rng.random() < 0.4:
+        values["taxiways"] = "oblique"
     data = base.to_dict()
     data.update(values)
     return Variety(SceneParams.from_dict(data, source=f"variety {seed}"), length, width)

@@ -14,7 +14,7 @@ import pytest
 
 from visland.camera import CameraModel
 from visland.render.markings import runway_markings
-from visland.render.params import MARKINGS, SceneParams
+from visland.render.params import MARKINGS, TAXIWAYS, SceneParams
 from visland.render.variety import RUNWAY_LENGTH_RANGE_M, RUNWAY_WIDTH_RANGE_M, draw_variety
 from visland.runway import Runway
 
@@ -33,6 +33,7 @@ def test_variety_draw_is_reproducible_and_within_the_issue_ranges():
     assert RUNWAY_WIDTH_RANGE_M[0] <= widths.min() and widths.max() <= RUNWAY_WIDTH_RANGE_M[1]
     assert {d.scene.markings for d in draws} == set(MARKINGS)
     assert {d.scene.monochrome for d in draws} == {True, False}
+    assert {d.scene.taxiways for d in draws} == set(TAXIWAYS)
     vis = np.array([d.scene.visibility_m for d in draws])
     assert 1500.0 <= vis.min() and vis.max() <= 30000.0 and vis.min() < 3000.0 and vis.max() > 15000.0
     assert all(d.scene.seed == seed for seed, d in enumerate(draws))
