@@ -117,15 +117,21 @@ def check_columns(table, name: str | None = None, columns=None, rows=None) -> No
         if limit is None or column not in table or table[column].dtype.kind != "f":
             continue
         values = table[column]
-        with np.errstate(invalid="ignore"):
-            bad = (values < limit.low) | (values > limit.high)
-        if rows is not None:
-            bad &= rows
-        index = np.nonzero(bad)[0]
-        if index.size:
-            i = int(index[0])
+        i = _first_outside(values, limit.low, limit.high, rows)
+        if i is not None:
             raise ValueError(f"{label} line {_line_of(table, i)}: column '{column}' is {values[i]:g}, outside the "
                              f"plausible {limit.describe()}")
+
+
+def _first_outside(values, low: float, high: float, rows=None):
+    """Index of the first of ``values`` outside ``[low, high]`` among ``rows`` (NaN is inside:
+    "not measured"), or None."""
+    with np.errstate(invalid="ignore"):
+        bad = (values < low) | (values > high)
+    if rows is not None:
+        bad &= rows
+    index = np.nonzero(bad)[0]
+    return int(index[0]) if index.size else None
 
 
 def check_frame_times(times_s, name: str) -> None:
@@ -231,15 +237,12 @@ def check_pixels(table, width: int, height: int, name: str | None = None, rows=N
                 continue
             values = table[column]
             low, high = -PIXEL_MARGIN * side, (1.0 + PIXEL_MARGIN) * side
-            with np.errstate(invalid="ignore"):
-                bad = (values < low) | (values > high)
-            if f"{corner}_visible" in table:
-                bad &= np.nan_to_num(table[f"{corner}_visible"], nan=0.0) > 0.5
-            if rows is not None:
-                bad &= rows
-            index = np.nonzero(bad)[0]
-            if index.size:
-                i = int(index[0])
+            checked = rows
+            if f"{corner}_visible" in table:            # a corner said not visible may lie anywhere
+                visible = np.nan_to_num(table[f"{corner}_visible"], nan=0.0) > 0.5
+                checked = visible if rows is None else visible & rows
+            i = _first_outside(values, low, high, checked)
+            if i is not None:
                 raise ValueError(f"{label} line {_line_of(table, i)}: column '{column}' is {values[i]:g} px, outside "
                                  f"the plausible {low:g}..{high:g} px (the {width}x{height} image and "
                                  f"{PIXEL_MARGIN:g} image size around it)")

@@ -85,16 +85,8 @@ SIZE = 384
 @pytest.fixture(scope="module")
 def rendered(tmp_path_factory):
     """A short approach (1.5 km, 16 s) rendered at 384 px and 2 Hz: 33 frames."""
-    from visland.camera import CameraModel
-    from visland.datasets import generate as gen
-    from visland.render.params import SceneParams
-    from visland.scenarios import Scenario
-    from visland.simulate import SimulationOptions
-    scenario = Scenario("short", dx_m=-1500.0, dy_m=25.0, dgs_m=-5.0, dpsi_deg=2.0, gamma_deg=-3.0)
-    options = SimulationOptions(fps=2.0, camera=CameraModel.default(SIZE), seed=1)
-    out = tmp_path_factory.mktemp("gen") / "short"
-    gen.generate_dataset(gen.GenerateJob(scenario, options, SceneParams(seed=1)), out, progress=False)
-    return out
+    from tests.helpers.short_approach import generate_short
+    return generate_short(tmp_path_factory.mktemp("gen") / "short", SIZE, 2.0)
 
 
 def _process(folder, out, source, observers, **kwargs):

@@ -16,12 +16,10 @@ from visland.camera import CameraModel
 from visland.cli import main
 from visland.contracts import (ESTIMATE_COLUMNS, MEASUREMENT_COLUMNS, read_estimates, read_labels, read_measurements,
                                read_truth)
-from visland.datasets import generate as gen
 from visland.datasets.pixel_errors import corner_errors_px, edge_errors_px
 from visland.datasets.process import ProcessOptions, process_input
-from visland.render.params import SceneParams
-from visland.scenarios import Scenario
-from visland.simulate import SimulationOptions
+
+from tests.helpers.short_approach import generate_short
 
 SIZE = 512
 OBSERVERS = ("ccpi-hg-2p", "cccj-2l", "ecc-hg")
@@ -36,12 +34,8 @@ def simulated(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def generated(tmp_path_factory):
-    """A short approach (1.5 km, about 20 s) rendered at 256 px and 5 Hz."""
-    scenario = Scenario("short", dx_m=-1800.0, dy_m=25.0, dgs_m=-5.0, dpsi_deg=2.0, gamma_deg=-3.0)
-    options = SimulationOptions(fps=5.0, camera=CameraModel.default(SIZE), seed=1)
-    out = tmp_path_factory.mktemp("gen") / "short"
-    gen.generate_dataset(gen.GenerateJob(scenario, options, SceneParams(seed=1)), out, progress=False)
-    return out
+    """A short approach (1.8 km, about 25 s) rendered at SIZE px and 5 Hz."""
+    return generate_short(tmp_path_factory.mktemp("gen") / "short", SIZE, 5.0, dx_m=-1800.0)
 
 
 def _quiet(**kwargs):

@@ -7,14 +7,12 @@ measurements and estimates, frame for frame and digit for digit.
 import numpy as np
 import pytest
 
-from visland.camera import CameraModel
 from visland.contracts import read_estimates, read_measurements
 from visland.datasets import generate as gen
 from visland.datasets.process import ProcessOptions, process_many
 from visland.datasets.stream import stream_process
-from visland.render.params import SceneParams
-from visland.scenarios import Scenario
-from visland.simulate import SimulationOptions
+
+from tests.helpers.short_approach import short_job
 
 OBSERVERS = ("ccpi-hg-2p", "ekf-2l")
 SOURCES = ("detection", "tracking")
@@ -22,9 +20,7 @@ SOURCES = ("detection", "tracking")
 
 def _job():
     """A short approach (1.5 km, about 20 s) at 512 px and 2 Hz: 35 frames."""
-    scenario = Scenario("short", dx_m=-1500.0, dy_m=10.0, dgs_m=-3.0, dpsi_deg=1.0, gamma_deg=-3.0)
-    options = SimulationOptions(fps=2.0, camera=CameraModel.default(512), seed=1)
-    return gen.GenerateJob(scenario, options, SceneParams(seed=1))
+    return short_job(512, 2.0, dy_m=10.0, dgs_m=-3.0, dpsi_deg=1.0)
 
 
 OPTIONS = ProcessOptions(observers=OBSERVERS, quiet=True, report=False)
