@@ -540,7 +540,9 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
         h_true = -state.p_runway_m[2]
         t = state.t_s
         features = None
-        if k % steps_per_frame == 0:
+        # once a go-around is decided nothing reads the camera any more: its 10 s are flown on the
+        # go-around orders alone, without rendering or measuring (100-250 frames per go-around)
+        if k % steps_per_frame == 0 and not go_around:
             tic = time.perf_counter()
             lost = (options.detection_lost_below_ft is not None and h_true < options.detection_lost_below_ft * FT_TO_M)
             if options.frozen_frames_at_ft is not None and frozen_until is None \

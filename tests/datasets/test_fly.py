@@ -51,6 +51,9 @@ def test_losing_the_runway_below_150_ft_is_a_go_around_at_100_ft():
     run = fly(_short(), FlyOptions(seed=3, detection_lost_below_ft=150.0))
     assert run["go_around"] and run["touchdown_x_m"] is None
     assert run["go_around_reason"].startswith("100 ft: runway found in 0%")
+    # no frame is measured after the decision (its 10 s are flown on the go-around orders)
+    decided_s = run["decisions"][-1]["t_s"]
+    assert max(row[0] for row in run["trace"]["rows"]) <= decided_s + 1e-9
 
 
 @pytest.mark.slow
