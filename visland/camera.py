@@ -245,22 +245,14 @@ class CameraModel:
 
     @classmethod
     def load(cls, path) -> "CameraModel":
-        """Read a ``camera.json`` file (SPEC contract).
+        """The camera of a ``camera.json`` file (SPEC contract); a ``ValueError`` in one sentence
+        naming the file and the field (:meth:`from_json_dict`), or saying the file is missing,
+        unreadable or not a JSON object.
 
         Parameters
         ----------
         path : str or pathlib.Path
             The file; a mask image it names is looked for beside it.
-
-        Returns
-        -------
-        CameraModel
-
-        Raises
-        ------
-        ValueError
-            One sentence naming the file and the field (:meth:`from_json_dict`), or the file
-            missing, unreadable or not a JSON object.
         """
         from visland.userfiles import read_json_object    # a byte-order mark, a folder, a list: one sentence
         path = Path(path)

@@ -213,23 +213,15 @@ class Runway:
 
     @classmethod
     def load(cls, path) -> "Runway":
-        """Read a ``runway.json`` file (SPEC: ``length_m``, ``width_m``, ``aim_distance_m``; optional
-        ``heading_deg``, ``slope_pct``).
+        """The runway of a ``runway.json`` file (SPEC: ``length_m``, ``width_m``, ``aim_distance_m``;
+        optional ``heading_deg``, ``slope_pct``); a ``ValueError`` in one sentence naming the file
+        and the field (:meth:`from_json_dict`), or saying the file is missing, unreadable or not a
+        JSON object.
 
         Parameters
         ----------
         path : str or pathlib.Path
             The file.
-
-        Returns
-        -------
-        Runway
-
-        Raises
-        ------
-        ValueError
-            One sentence naming the file and the field (:meth:`from_json_dict`), or the file
-            missing, unreadable or not a JSON object.
         """
         path = Path(path)
         return cls.from_json_dict(read_json_object(path, "runway file"), source=str(path))

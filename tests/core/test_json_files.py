@@ -20,6 +20,17 @@ def _one_sentence(error, *parts):
         assert part in message, message
 
 
+def _refused_with(path, field, value, load, words):
+    """``path`` (a JSON object that loads) with ``field`` set to ``value``: ``load`` refuses it in
+    one sentence naming the file and holding ``words``."""
+    data = json.loads(path.read_text())
+    data[field] = value
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValueError) as error:
+        load(path)
+    _one_sentence(error, str(path), words)
+
+
 # ---------------------------------------------------------------- camera.json
 @pytest.mark.parametrize("field, value, words", [
     ("width", "wide", "field 'width' must be an integer, got 'wide'"),
@@ -33,12 +44,7 @@ def test_a_malformed_camera_field_is_one_sentence_naming_it(tmp_path, field, val
     path = tmp_path / "camera.json"
     CameraModel.default(512).save(path)
     assert CameraModel.load(path).to_json_dict() == CameraModel.default(512).to_json_dict()
-    data = json.loads(path.read_text())
-    data[field] = value
-    path.write_text(json.dumps(data))
-    with pytest.raises(ValueError) as error:
-        CameraModel.load(path)
-    _one_sentence(error, str(path), words)
+    _refused_with(path, field, value, CameraModel.load, words)
 
 
 def test_the_input_camera_is_the_given_file_or_the_folders_own(tmp_path):
@@ -69,12 +75,7 @@ def test_a_malformed_runway_field_is_one_sentence_naming_it(tmp_path, field, val
     runway = Runway(length_m=2500.0, width_m=30.0, aim_distance_m=320.0, heading_deg=123.0, slope_pct=0.5)
     path.write_text(json.dumps(runway.to_json_dict()))
     assert Runway.load(path) == runway
-    data = json.loads(path.read_text())
-    data[field] = value
-    path.write_text(json.dumps(data))
-    with pytest.raises(ValueError) as error:
-        Runway.load(path)
-    _one_sentence(error, str(path), words)
+    _refused_with(path, field, value, Runway.load, words)
 
 
 def test_runway_json_needs_the_spec_fields_and_ignores_more(tmp_path):
