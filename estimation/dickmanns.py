@@ -611,6 +611,29 @@ def state_jacobian(state, omega_runway_rps, with_wind: bool = True) -> np.ndarra
     return F
 
 
+def _transition_matrix(state, omega_runway_rps, with_wind: bool, T: float) -> np.ndarray:
+    """``F_d = I + F T`` (12, 12) with ``F`` of :func:`state_jacobian`, written entry by entry into a copy
+    of the identity (the same values as ``I + state_jacobian(...) * T`` without the two whole-matrix
+    operations: the covariance propagation runs at every update)."""
+    xi, zeta, eta, vx, vy, vz = state[0], state[1], state[2], state[3], state[4], state[5]
+    omega = state[_OMEGA]
+    o0, o1, o2 = omega_runway_rps[0] * T, omega_runway_rps[1] * T, omega_runway_rps[2] * T
+    Fd = _I12.copy()
+    d = 1.0 + eta * vz * T
+    Fd[_XI, _XI], Fd[_XI, _ETA], Fd[_XI, _VX], Fd[_XI, _VZ] = d, (vx + xi * vz) * T, eta * T, eta * xi * T
+    Fd[_ZETA, _ZETA], Fd[_ZETA, _ETA], Fd[_ZETA, _VY], Fd[_ZETA, _VZ] = d, (vy + zeta * vz) * T, eta * T, eta * zeta * T
+    Fd[_ETA, _ETA], Fd[_ETA, _VZ] = 1.0 + 2.0 * vz * eta * T, eta * eta * T
+    Fd[_OMEGA, _OMEGA], Fd[_OMEGA, _ETA], Fd[_OMEGA, _VZ] = d, omega * vz * T, omega * eta * T
+    Fd[_VX, _VY], Fd[_VX, _VZ] = -o2, o1
+    Fd[_VY, _VX], Fd[_VY, _VZ] = o2, -o0
+    Fd[_VZ, _VX], Fd[_VZ, _VY] = -o1, o0
+    if with_wind:
+        Fd[_VX, _WY] = o2
+        Fd[_VY, _WX] = -o2
+        Fd[_VZ, _WX], Fd[_VZ, _WY] = o1, -o0
+    return Fd
+
+
 def segment_line_covariance(a_xy, b_xy, m_reference, sigma: float) -> tuple:
     """Covariance of ``(theta, rho)`` of the line through two image points, as ``(var_theta, cov, var_rho)``.
 
@@ -737,6 +760,7 @@ class Dickmanns4D(Observer):
         self._x = np.zeros(N_STATES)
         self._P = np.eye(N_STATES)
         self._pending_s = 0.0
+        self._packed = None                 # (x, P, pending, packed state) of the last step (_pack)
         self._omega_prev = np.zeros(3)
         self._with_wind = False
         self._t_update = 0.0
@@ -748,15 +772,39 @@ class Dickmanns4D(Observer):
         q[_VX:_VY + 1] += p.q_wind ** 2                     # a wind change moves the ground velocity
         q[_AX:_AZ + 1] = p.q_attitude ** 2
         self._Q_base = np.diag(q)
+        self._q_diag = q.tolist()
+        qw = p.q_wind ** 2                                  # with the wind states: their own noise, shared
+        self._Q_wind = self._Q_base.copy()
+        self._Q_wind[_WX, _WX] = self._Q_wind[_WY, _WY] = qw
+        self._Q_wind[_VX, _WX] = self._Q_wind[_WX, _VX] = self._Q_wind[_VY, _WY] = self._Q_wind[_WY, _VY] = qw
 
     # ---- state bookkeeping
     def _get_state(self):
+        packed = self._packed
+        if packed is not None and packed[0] is self._x and packed[1] is self._P and packed[2] == self._pending_s:
+            return packed[3].copy()
         return np.concatenate([self._x, self._P.ravel(), [self._pending_s]])
+
+    def _pack(self, x) -> np.ndarray:
+        """The state of :meth:`_get_state` after a step (``x`` the mean as floats), kept for the next
+        step's backup: the covariance is copied only when it changed (every other inertial step
+        only moves the mean), and the mean becomes a view of the packed array."""
+        packed = self._packed
+        if packed is not None and packed[1] is self._P:
+            a = packed[3].copy()
+            a[:N_STATES] = x
+            a[-1] = self._pending_s
+        else:
+            a = np.concatenate([x, self._P.ravel(), [self._pending_s]])
+        self._x = a[:N_STATES]
+        self._packed = (self._x, self._P, self._pending_s, a)
+        return a
 
     def _set_state(self, state):
         self._x = state[:N_STATES].copy()
         self._P = state[N_STATES:N_STATES + N_STATES * N_STATES].reshape(N_STATES, N_STATES).copy()
         self._pending_s = float(state[-1])
+        self._packed = None
 
     def _dh_from_state(self, state):
         return 1.0 / clip_eta(float(state[_ETA]))
@@ -778,9 +826,9 @@ class Dickmanns4D(Observer):
 
     def deviations(self, aim_distance_m: float = DEFAULT_AIM_DISTANCE_M) -> Deviations:
         """SPEC deviations from the state: ``dH = 1/eta``, ``dX = x - D``, ``dY = y``, width ``W``."""
-        x = self._x
+        x = self._x.tolist()
         h = 1.0 / x[_ETA]
-        return Deviations(float(x[_XI] * h - aim_distance_m), float(x[_ZETA] * h), float(h), float(x[_OMEGA] * h))
+        return Deviations(x[_XI] * h - aim_distance_m, x[_ZETA] * h, h, x[_OMEGA] * h)
 
     def dx_sigma_m(self) -> float:
         """Standard deviation of ``dX`` from the covariance (first order), metres.
@@ -853,6 +901,7 @@ class Dickmanns4D(Observer):
             P[i, i] = p.p0_wind_mps ** 2 if self._with_wind else 0.0
         self._P = P
         self._pending_s = 0.0
+        self._packed = None
         self._omega_prev = R_rc @ first.omega_camera_rps
         self._t_update = float(first.t_s)
         self._observability = 0.0
@@ -871,17 +920,17 @@ class Dickmanns4D(Observer):
         h = 0.5 * dt_s
         x = [a + h * (b + c) for a, b, c in zip(x, k1, k2)]
         x[_ETA] = clip_eta(x[_ETA])
-        self._x = np.array(x)
         self._omega_prev = omega1
         self._dpsi_in = float(inp.dpsi_rad)
         self._pending_s += dt_s
         t = float(inp.t_s)
         if measurement is not None or t - self._t_update >= p.inertial_update_interval_s - 1e-9:
             self._propagate_covariance(omega1, x)
-            self._update(inp, measurement, x)
+            x = self._update(inp, measurement, x)
             self._t_update = t
-        return Estimate(t_s=t, dh_m=1.0 / self._x[_ETA], observability=self._observability,
-                        coasting=measurement is None, state=self._get_state())
+        state = self._pack(x)
+        return Estimate(t_s=t, dh_m=1.0 / x[_ETA], observability=self._observability,
+                        coasting=measurement is None, state=state.copy())
 
     def _propagate_covariance(self, omega_runway_rps, x) -> None:
         """``P <- F_d P F_d^T + Q T`` over the pending time ``T`` (class docstring); ``x`` the mean as
@@ -890,22 +939,22 @@ class Dickmanns4D(Observer):
         T = self._pending_s
         if T <= 0.0:
             return
-        Fd = _I12 + state_jacobian(x, omega_runway_rps, self._with_wind) * T
-        Q = self._Q_base.copy()
+        Fd = _transition_matrix(x, omega_runway_rps, self._with_wind, T)
+        Q = self._Q_wind if self._with_wind else self._Q_base     # (the wind's noise shared with the velocity)
+        QT = Q * T
         eta = x[_ETA]
         q_pos = (p.q_position * eta) ** 2                     # position noise in the ratio coordinates
-        Q[_XI, _XI] += q_pos
-        Q[_ZETA, _ZETA] += q_pos
-        Q[_ETA, _ETA] += q_pos * eta * eta
-        if self._with_wind:
-            qw = p.q_wind ** 2
-            Q[_WX, _WX] = Q[_WY, _WY] = qw
-            Q[_VX, _WX] = Q[_WX, _VX] = Q[_VY, _WY] = Q[_WY, _VY] = qw
-        self._P = Fd @ self._P @ Fd.T + Q * T
+        QT[_XI, _XI] = (self._q_diag[_XI] + q_pos) * T
+        QT[_ZETA, _ZETA] = (self._q_diag[_ZETA] + q_pos) * T
+        QT[_ETA, _ETA] = (self._q_diag[_ETA] + q_pos * eta * eta) * T
+        P = Fd @ self._P @ Fd.T
+        P += QT
+        self._P = P
         self._pending_s = 0.0
 
-    def _update(self, inp: ObserverInput, measurement, s) -> None:
-        """One joint update (class docstring); ``s`` the predicted mean as a list of floats."""
+    def _update(self, inp: ObserverInput, measurement, s) -> list:
+        """One joint update (class docstring); ``s`` the predicted mean as a list of floats. Sets the
+        covariance; returns the corrected mean (floats)."""
         p = self.params
         tas = inp.tas_mps
         with_air = self._with_wind and math.isfinite(tas)
@@ -957,11 +1006,11 @@ class Dickmanns4D(Observer):
         _, Kt, info = _dposv(S, PHt.T)
         if info != 0:                                                   # not positive definite: LU
             Kt = np.linalg.solve(S, PHt.T)
-        x = self._x + np.dot(innovation, Kt)
-        x[_ETA] = clip_eta(float(x[_ETA]))
-        self._x = x
+        x = (np.array(s) + np.dot(innovation, Kt)).tolist()
+        x[_ETA] = clip_eta(x[_ETA])
         P = P - PHt @ Kt
         self._P = 0.5 * (P + P.T)
+        return x
 
     def _vision_covariance(self, s, M, M_C, with_threshold: bool, R, i0: int) -> None:
         """R of the vision block, written into ``R[i0:, i0:]``: each runway line through two image
