@@ -947,7 +947,7 @@ class Dickmanns4D(Observer):
         QT[_XI, _XI] = (self._q_diag[_XI] + q_pos) * T
         QT[_ZETA, _ZETA] = (self._q_diag[_ZETA] + q_pos) * T
         QT[_ETA, _ETA] = (self._q_diag[_ETA] + q_pos * eta * eta) * T
-        P = Fd @ self._P @ Fd.T
+        P = np.dot(np.dot(Fd, self._P), Fd.T)
         P += QT
         self._P = P
         self._pending_s = 0.0
@@ -1000,16 +1000,19 @@ class Dickmanns4D(Observer):
         # positive definite, so its Cholesky factor solves for K^T (LAPACK dposv: a third of the
         # time numpy.linalg.solve takes on 13 x 13, most of which is call overhead)
         P = self._P
-        PHt = P @ H.T
-        S = H @ PHt
+        PHt = np.dot(P, H.T)
+        S = np.dot(H, PHt)
         S += R
         _, Kt, info = _dposv(S, PHt.T)
         if info != 0:                                                   # not positive definite: LU
             Kt = np.linalg.solve(S, PHt.T)
         x = (np.array(s) + np.dot(innovation, Kt)).tolist()
         x[_ETA] = clip_eta(x[_ETA])
-        P = P - PHt @ Kt
-        self._P = 0.5 * (P + P.T)
+        P = P - np.dot(PHt, Kt)
+        P_sym = P.T.copy()                      # 0.5 (P + P^T), without numpy's strided add
+        P_sym += P
+        P_sym *= 0.5
+        self._P = P_sym
         return x
 
     def _vision_covariance(self, s, M, M_C, with_threshold: bool, R, i0: int) -> None:
