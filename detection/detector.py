@@ -32,11 +32,12 @@ from visland.camera import CameraModel
 from visland.detection.candidates import candidate_lines, check_lines, hough_segments
 from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
-from visland.detection.refine import LineFit, NoFit, PixelLine, chroma_boundary, refine_line
+from visland.detection.refine import LineFit, NoFit, PixelLine, chroma_boundary, chroma_of, refine_line
 from visland.detection.result import DetectionResult, not_found
 from visland.detection.threshold_marking import ground_begins, threshold_marking
 from visland.detection.transverse import find_transverse_line, surface_extent
-from visland.detection.trapezoid import Prediction, RunwayHypothesis, runway_hypotheses
+from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
+                                         wider_strip_beside)
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
 from visland.folder import as_grey, ignored_pixels, scene_frame
 from visland.runway import CORNER_NAMES
@@ -272,6 +273,27 @@ class _Context:
         self.start = start
         horizon_rho, horizon_theta = horizon.rho, horizon.theta
         self.horizon_line = (horizon_rho, horizon_theta)
+        self._chroma = None
+
+    @property
+    def chroma(self):
+        """The chroma once :meth:`ground_chroma` has found it usable, else None."""
+        return self._chroma if self._chroma is not None and self._chroma is not False else None
+
+    def ground_chroma(self, roi):
+        """The colour frame's chroma (:func:`~visland.detection.refine.chroma_of`), or None for a
+        grey-level frame or one whose ground in ``roi`` has no chroma to tell surfaces apart
+        (a monochrome camera's frame as RGB, snow): its 1st-99th percentile spread is under
+        ``params.min_contrast``."""
+        if self.colour is None:
+            return None
+        if self._chroma is None:
+            chroma = chroma_of(self.colour)
+            u0, v0, u1, v1 = roi
+            sample = chroma[v0:v1:4, u0:u1:4]
+            spread = _percentile_spread(sample, 1.0, 99.0) if sample.size else 0.0
+            self._chroma = chroma if spread >= self.params.min_contrast else False
+        return self._chroma if self._chroma is not False else None
 
 
 def _predict(previous: DetectionResult, ctx: _Context, ground):
@@ -349,8 +371,11 @@ def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
     params, horizon = ctx.params, ctx.horizon
     segments = hough_segments(ctx.image, roi, max_side_px, params)
     lines = check_lines(ctx.image, horizon, candidate_lines(segments, horizon, params), params)
-    hypotheses = runway_hypotheses(ctx.image, horizon, lines, params, prediction,
-                                   bottom_depth_px=_deepest_visible(horizon, ctx.camera.width, ctx.camera.height))
+    bottom_depth = _deepest_visible(horizon, ctx.camera.width, ctx.camera.height)
+    hypotheses = runway_hypotheses(ctx.image, horizon, lines, params, prediction, bottom_depth_px=bottom_depth)
+    chroma = ctx.ground_chroma(roi) if prediction is None and hypotheses else None
+    if chroma is not None:
+        hypotheses = _wider_strip_in_chroma(hypotheses, chroma, ctx, lines, bottom_depth)
     if not hypotheses:
         return None, (f"no pair of edges meeting on the horizon among {len(lines)} candidate lines "
                       f"({len(segments)} Hough segments)")
@@ -365,6 +390,31 @@ def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
             # one (a taxiway beside it) is not taken in its place
             break
     return None, reasons[0]
+
+
+def _wider_strip_in_chroma(hypotheses, chroma, ctx: _Context, lines, bottom_depth: float):
+    """The grey-level ranking, with the best strip of the chroma ahead of it when that strip is
+    a wider paved strip beside the grey levels' best (:func:`~visland.detection.trapezoid.wider_strip_beside`).
+
+    Pavement is grey: a runway whose grey level is the ground's (concrete on dry grass) is still
+    a strip of low chroma, when a darker taxiway beside it is the only strip in grey levels. Of
+    parallel paved strips the runway is the widest; the narrower ones beside it are then not
+    tried in its place (if it cannot be measured, the frame is not found). The chroma strip has
+    no centre-line polarity (it is searched both ways in grey levels) and is measured on the
+    chroma where the grey levels cannot tell its surface from the ground (``evidence["channel"]``).
+    """
+    params = ctx.params
+    best = hypotheses[0]
+    in_chroma = runway_hypotheses(chroma, ctx.horizon, lines, params, None, bottom_depth_px=bottom_depth, inside=-1,
+                                  vanishing_points=[best.s0])
+    if not in_chroma:
+        return hypotheses
+    top = in_chroma[0]
+    if not (is_convincing_strip(top, params) and is_convincing_strip(best, params)
+            and wider_strip_beside(best, top, params)):
+        return hypotheses
+    top = replace(top, centre_polarity=0, evidence={**top.evidence, "channel": "chroma"})
+    return [top] + [h for h in hypotheses if not wider_strip_beside(h, top, params)]
 
 
 def _pencil_pixel_line(horizon: HorizonFrame, s0: float, k: float, d_ref: float) -> PixelLine:
@@ -562,7 +612,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     if heading is None:
         return None, why
     vp_uv, dF_px, dpsi_rad = heading
-    transverse = _threshold_and_end(ctx, pair, vp_uv, bottom_depth)
+    transverse = _threshold_and_end(ctx, pair, vp_uv, bottom_depth, _extent_image(ctx, hypothesis))
     notes.extend(transverse.notes)
     confidence, why = _confidence(ctx.params, pair, centre_fit)
     if confidence is None:
@@ -585,6 +635,15 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         elapsed_s=time.perf_counter() - ctx.start, notes=tuple(notes)), None
 
 
+def _extent_image(ctx: _Context, hypothesis: RunwayHypothesis):
+    """The image in which the strip of ``hypothesis`` ends: the chroma for a strip found in the
+    chroma only (its grey level is the ground's, :func:`_wider_strip_in_chroma`), else the grey
+    levels."""
+    if hypothesis.evidence.get("channel") == "chroma" and ctx.chroma is not None:
+        return ctx.chroma
+    return ctx.image
+
+
 def _refine_edges(ctx: _Context, hypothesis: RunwayHypothesis, prediction: Prediction | None,
                   bottom_depth: float) -> tuple[dict | None, str | None]:
     """The left and right edges of ``hypothesis`` refined on the frame, each long, supported and
@@ -595,9 +654,10 @@ def _refine_edges(ctx: _Context, hypothesis: RunwayHypothesis, prediction: Predi
     width_slope = hypothesis.k_right - hypothesis.k_left
     halfwidth = params.search_halfwidth_px if prediction is None else max(params.search_halfwidth_px,
                                                                           prediction.sigma_px)
+    extent_image = _extent_image(ctx, hypothesis)
     # where the strip's surface starts and ends, before fitting its edges there (beyond its
     # ends, texture lined up with an edge would turn the fit)
-    extent = surface_extent(ctx.image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
+    extent = surface_extent(extent_image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
                             (hypothesis.d_far, hypothesis.d_near), (1.0, bottom_depth), marking_fraction=0.0,
                             max_rows=params.edge_surface_rows)
     d_lo, d_hi = (hypothesis.d_far, hypothesis.d_near) if extent is None else extent
@@ -709,7 +769,8 @@ def _heading(ctx: _Context, pair: _EdgePair, centre_fit: LineFit | None):
     return (vp_uv, dF_px, dpsi_rad), None
 
 
-def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom_depth: float) -> _TransverseLines:
+def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom_depth: float,
+                       extent_image=None) -> _TransverseLines:
     """The threshold and the runway end: where the runway's surface ends along it, the transverse
     steps there through V2 (:mod:`visland.detection.transverse`), the threshold moved to where
     the pavement ends or to a threshold marking (:mod:`visland.detection.threshold_marking`),
@@ -730,13 +791,14 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
     # the edges' slopes as lines through the fused vanishing point, at mid depth
     k_left_through_vp = (pair.s0_left + pair.k_left * d_mid - s0_vp) / d_mid
     k_right_through_vp = (pair.s0_right + pair.k_right * d_mid - s0_vp) / d_mid
-    extent = surface_extent(ctx.image, horizon, s0_vp, k_left_through_vp, k_right_through_vp, (d_far, d_near),
-                            (1.0, bottom_depth))
+    in_chroma = extent_image is not None and extent_image is not ctx.image
+    extent = surface_extent(extent_image if in_chroma else ctx.image, horizon, s0_vp, k_left_through_vp,
+                            k_right_through_vp, (d_far, d_near), (1.0, bottom_depth))
     d_near_expected, d_far_expected = d_near, d_far
     surface_level = math.nan
     if extent is not None:
         d_far_expected, d_near_expected = extent
-        surface_level = extent.level
+        surface_level = extent.level if not in_chroma else math.nan      # a grey level, unknown here
 
     def window(depth):
         half = max(params.threshold_window_min_px, 0.5 * params.threshold_search_fraction * depth_span,

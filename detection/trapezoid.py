@@ -37,7 +37,8 @@ from visland.detection.refine import median_of
 from visland.detection.pencil import (PencilEdges, PencilImage, as_slice, finite_median, pencil_edges, rectify, row_mean,
                                       row_quantile)
 
-__all__ = ["Prediction", "RunwayHypothesis", "vanishing_point_candidates", "runway_hypotheses"]
+__all__ = ["Prediction", "RunwayHypothesis", "vanishing_point_candidates", "runway_hypotheses", "is_convincing_strip",
+           "wider_strip_beside"]
 
 
 @dataclass(frozen=True)
@@ -170,14 +171,16 @@ def vanishing_point_candidates(lines: CandidateLines, params: DetectorParams, ma
 
 def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, params: DetectorParams,
                       prediction: Prediction | None = None,
-                      bottom_depth_px: float = math.inf) -> list[RunwayHypothesis]:
+                      bottom_depth_px: float = math.inf, inside: int = 0,
+                      vanishing_points: list[float] | None = None) -> list[RunwayHypothesis]:
     """Rank left/right edge pairs by the trapezoid model and the image evidence (best first;
     at most ``params.max_hypotheses``).
 
     Parameters
     ----------
     image : ndarray of uint8, shape (H, W)
-        Full-resolution grey frame.
+        Full-resolution grey frame, or any one-channel image in which a runway is a strip (its
+        chroma: :func:`visland.detection.refine.chroma_of`).
     horizon : HorizonFrame
         The frame's horizon, which sets the (s, d) coordinates.
     lines : CandidateLines
@@ -189,6 +192,12 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
         and hypotheses agreeing with it are preferred.
     bottom_depth_px : float, optional
         Deepest depth visible in the frame (pixels below the horizon).
+    inside : int, optional
+        -1 keeps only strips lower inside than beside them (+1 higher, 0 both): paved surfaces
+        are grey, so in chroma a runway is a strip of low chroma, and a strip of high chroma is a
+        field between paved areas.
+    vanishing_points : list of float, optional
+        Acquisition only: search through these horizon points ``s0`` instead of those of ``lines``.
 
     Returns
     -------
@@ -201,8 +210,12 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
     """
     hypotheses = []
     tracking = prediction is not None
-    points = vanishing_point_candidates(lines, params, prediction=prediction,
-                                        max_points=params.vp_points_tracking if tracking else params.vp_points_acquisition)
+    if vanishing_points is not None and not tracking:
+        points = [(float(s0), math.inf, (math.nan, math.nan), (math.nan, math.nan)) for s0 in vanishing_points]
+    else:
+        points = vanishing_point_candidates(lines, params, prediction=prediction,
+                                            max_points=params.vp_points_tracking if tracking
+                                            else params.vp_points_acquisition)
     for s0, _, (k_min, k_max), (d_min, d_max) in points:
         # the lines that found the point need not be the runway's (a taxiway, a field boundary
         # along it): search every slope, unless tracking a predicted runway
@@ -221,7 +234,9 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
         if rect is None:
             continue
         edges = pencil_edges(rect, params)
-        hypotheses.extend(_pairs(rect, edges, params, prediction, horizon.camera.fx, bottom_depth_px))
+        pairs = _pairs(rect, edges, params, prediction, horizon.camera.fx, bottom_depth_px)
+        # the left edge steps down into a strip lower than its surroundings
+        hypotheses.extend(h for h in pairs if not inside or h.polarity_left == inside)
     hypotheses.sort(key=lambda h: -h.score)
     hypotheses = _prefer_enclosing(hypotheses, params)
     hypotheses = _prefer_widest_parallel(hypotheses, params)
@@ -448,6 +463,56 @@ def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, 
     return ends
 
 
+def is_convincing_strip(h: RunwayHypothesis, params: DetectorParams) -> bool:
+    """Whether ``h`` is a convincing paved strip (:func:`_prefer_widest_parallel`): an inside that
+    differs from the outside as much as the edges say (``strip_min_interior``) and is mostly one
+    surface (``strip_max_spread``: a runway's markings spread it), the same ground on both sides
+    (``strip_max_outside_gap``), and an end in view.
+
+    Parameters
+    ----------
+    h : RunwayHypothesis
+        A hypothesis with its ``evidence`` (from :func:`runway_hypotheses`).
+    params : DetectorParams
+        The ``strip_*`` parameters.
+
+    Returns
+    -------
+    bool
+    """
+    e = h.evidence
+    contrast = max(e.get("contrast", 0.0), 1e-6)
+    interior = abs(e.get("interior", 0.0))
+    return (interior >= params.strip_min_interior * contrast
+            and abs(e.get("outside_gap", math.inf)) <= params.strip_max_outside_gap * max(interior, contrast)
+            and e.get("spread", math.inf) <= params.strip_max_spread * interior    # mostly one surface
+            and e.get("ends", 0) >= 1)
+
+
+def wider_strip_beside(h: RunwayHypothesis, r: RunwayHypothesis, params: DetectorParams) -> bool:
+    """Whether ``r`` is a paved strip beside ``h`` (the same vanishing point, ground at least
+    ``params.parallel_min_gap`` of ``h``'s width between them) and wider by
+    ``params.parallel_min_width_ratio``: of the two, ``r`` is the runway. Unlike
+    :func:`_side_by_side` the steps are not compared: ``r`` may come from another channel (the
+    chroma, where pavement is always the lower side).
+
+    Parameters
+    ----------
+    h, r : RunwayHypothesis
+        Two hypotheses in horizon coordinates (``s = s0 + k d``; ``k`` is lateral offset over height).
+    params : DetectorParams
+        ``parallel_min_gap`` and ``parallel_min_width_ratio``.
+
+    Returns
+    -------
+    bool
+    """
+    width = h.k_right - h.k_left
+    gap = params.parallel_min_gap * width
+    apart = r.k_left - h.k_right >= gap or h.k_left - r.k_right >= gap
+    return abs(r.s0 - h.s0) < 1e-6 and apart and (r.k_right - r.k_left) > params.parallel_min_width_ratio * width
+
+
 def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], params: DetectorParams) -> list[RunwayHypothesis]:
     """Of strips running side by side (one vanishing point, disjoint), put the widest first.
 
@@ -460,13 +525,7 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], params: Detector
     on both sides (``strip_max_outside_gap``), and an end in view.
     """
     def is_strip(h):
-        e = h.evidence
-        contrast = max(e.get("contrast", 0.0), 1e-6)
-        interior = abs(e.get("interior", 0.0))
-        return (interior >= params.strip_min_interior * contrast
-                and abs(e.get("outside_gap", math.inf)) <= params.strip_max_outside_gap * max(interior, contrast)
-                and e.get("spread", math.inf) <= params.strip_max_spread * interior    # mostly one surface
-                and e.get("ends", 0) >= 1)
+        return is_convincing_strip(h, params)
 
     ordered = []
     remaining = list(hypotheses)
