@@ -848,7 +848,11 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         marking = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                     d_pavement, 1.0, min_step, surface_level=surface_level,
                                     pavement_step=pavement_step)
-        if marking is not None:
+        if marking is not None and marking.line is None:
+            notes.append(f"threshold withheld: plain pavement, then a marking {marking.pavement_widths:.1f} runway "
+                         "widths in, too far to be placed (a displaced threshold?)")
+            near = None
+        elif marking is not None:
             notes.append(f"threshold on the {marking.kind} marking {marking.pavement_widths:.1f} runway widths "
                          "inside the pavement")
             near = marking.line

@@ -52,16 +52,18 @@ class ThresholdMarking:
 
     Attributes
     ----------
-    line : TransverseLine
-        The threshold line placed from the marking, with its corners.
+    line : TransverseLine or None
+        The threshold line placed from the marking, with its corners; None for ``"unresolved"``.
     kind : str
-        ``"bar"`` (a transverse bar: the threshold at its near edge) or ``"stripes"`` (the
-        threshold 6 m before them, :data:`STRIPES_FROM_THRESHOLD_WIDTHS`).
+        ``"bar"`` (a transverse bar: the threshold at its near edge), ``"stripes"`` (the
+        threshold 6 m before them, :data:`STRIPES_FROM_THRESHOLD_WIDTHS`), or ``"unresolved"``
+        (plain pavement, then a brighter line the frame cannot place: the threshold is doubtful
+        and is withheld).
     pavement_widths : float
         The paved length before the marking, in runway widths.
     """
 
-    line: TransverseLine
+    line: TransverseLine | None
     kind: str
     pavement_widths: float
 
@@ -70,7 +72,9 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
                       d_pavement: float, d_far: float, min_step: float, surface_level: float = math.nan,
                       pavement_step: float = 0.0, min_pavement_widths: float = 0.8, max_pavement_widths: float = 12.0,
                       n_columns: int = 64, step_d_px: float = 0.5,
-                      min_resolved_px: float = 1.5) -> ThresholdMarking | None:
+                      min_resolved_px: float = 1.5, min_unresolved_span_px: float = 6.0,
+                      start_fraction: float = 0.25, unresolved_coverage: float = 0.6,
+                      unresolved_plain_px: float = 3.0) -> ThresholdMarking | None:
     """The threshold marking when the pavement before it starts at ``d_pavement`` (module docstring).
 
     Parameters
@@ -107,12 +111,35 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         blurred across the width) would be taken for them. Measured on visland's thesis-1 at
         4.5 km (2048 px camera, 1.0 px for 0.8 widths): the aiming-point marks 9.2 widths in moved
         the threshold 14 px; the ray-cast blast pad at 900 m (768 px camera, 1.9 px) needs the search.
+        Below it (*unresolved*) those stripes are still seen blended: a line within the first
+        ``min_pavement_widths`` (plus 1 px of blur) brighter than the pavement's median line by
+        ``start_fraction`` of the markings' contrast keeps the pavement's start (None, as
+        before). Otherwise a band across the width covering ``unresolved_coverage`` of it, on
+        lines crossing the runway over ``min_unresolved_span_px`` at least (stripes are not told
+        from a bar there), is the marking; and when there is none the frame can place, but the
+        first ``unresolved_plain_px`` of pavement are plain (their lines within half ``min_step``)
+        and a line further in is brighter by ``min_step`` and half ``pavement_step`` at least, a
+        marking lies inside the pavement that the frame cannot place: the threshold is doubtful
+        (kind ``"unresolved"``). Measured on the robustness study's displaced threshold (1024 px):
+        at 2500 m the bar 7 widths in is placed (0.32 px; 10.2 px off at the pavement's start);
+        at 3680 m it is a 0.3 px line dimmer than the pavement's step, withheld (was 9.1 px off).
+    min_unresolved_span_px : float, optional
+        Unresolved: pixels a transverse line must cross the runway over to be read.
+    start_fraction : float, optional
+        Unresolved: the first lines' excess over the pavement's median line, as a fraction of the
+        markings' contrast, that shows the threshold's blended stripes at the pavement's start.
+    unresolved_coverage : float, optional
+        Unresolved: fraction of the width a band must cover to be the marking.
+    unresolved_plain_px : float, optional
+        Unresolved: depth pixels of plain pavement at its start before a brighter line makes the
+        threshold doubtful.
 
     Returns
     -------
     ThresholdMarking or None
         None when no threshold marking begins inside the pavement (the usual runway, or one
-        without threshold markings: the pavement's start stands).
+        without threshold markings: the pavement's start stands); ``line`` None when one does
+        but cannot be placed (the caller withholds the threshold).
     """
     line_left, line_right = left.homogeneous(), right.homogeneous()
     s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_pavement)
@@ -125,8 +152,9 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     def depth_at(widths):                      # depth of the point `widths` runway widths farther along
         return fx / (fx / d_pavement + widths * width_k)
 
-    if d_pavement - depth_at(min_pavement_widths) < min_resolved_px:
-        return None                              # too far to tell the threshold's own stripes
+    # too far to resolve the threshold's own stripes at the pavement's start: they are still seen
+    # blended, a brighter first pixel of pavement (checked below, before a band further in counts)
+    unresolved = d_pavement - depth_at(min_pavement_widths) < min_resolved_px
     d_lo = max(depth_at(max_pavement_widths), d_far + 2.0, 1.0)
     d_hi = d_pavement - 0.5
     if d_hi - d_lo < 4.0:
@@ -141,7 +169,8 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         return None
     # a line must cross the runway over several pixels to tell stripes apart
     span_px = np.linalg.norm(ends_right - ends_left, axis=1)
-    rows_ok &= span_px >= 2.0 * n_columns / 8.0
+    # (unresolved: only a band's presence across the width is asked, not its stripes)
+    rows_ok &= span_px >= (min_unresolved_span_px if unresolved else 2.0 * n_columns / 8.0)
     if rows_ok.sum() < 8:
         return None
     maps = (np.where(inside, grid[..., 0], -1).astype(np.float32), np.where(inside, grid[..., 1], -1).astype(np.float32))
@@ -159,8 +188,29 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     sign = 1.0
     bright = float(np.nanpercentile(ok, 99.0))
     contrast = bright - surface
+    level = np.nanmean(np.where(inside, values, np.nan), axis=1)          # across the width, per line
+    doubtful = None
+    if unresolved:
+        # the stripes of a threshold at the pavement's start lie within its first 0.8 widths (plus
+        # the blur): a brighter line there, and the threshold is where the pavement begins
+        start = (depths >= depth_at(min_pavement_widths) - 1.0) & rows_ok
+        plain = float(np.nanmedian(level[rows_ok]))
+        if not start.any() or float(np.nanmax(level[start])) - plain > start_fraction * max(contrast, 0.0):
+            return None
+        # plain pavement first (no marking for several pixels: paved ground before the threshold)
+        # then a brighter line further in: a marking the frame cannot place, so the threshold is
+        # doubtful (at 3680 m on 1024 px a displaced threshold's bar 6.7 widths in is a 0.3 px
+        # line, dimmed below the pavement's own step)
+        first_px = rows_ok & (depths >= d_hi - unresolved_plain_px)
+        later = rows_ok & (depths < d_hi - unresolved_plain_px)
+        if first_px.sum() >= 4 and later.any() and np.ptp(level[first_px]) <= 0.5 * min_step:
+            rise = float(np.nanmax(level[later]) - np.median(level[first_px]))
+            if rise >= max(min_step, 0.5 * abs(pavement_step)):
+                j = int(np.nonzero(later)[0][np.nanargmax(level[later])])
+                doubtful = ThresholdMarking(line=None, kind="unresolved",
+                                            pavement_widths=float((fx / depths[j] - fx / d_pavement) / width_k))
     if not contrast >= max(2.0 * min_step, abs(pavement_step)):
-        return None
+        return doubtful
     marked = np.nan_to_num((values - surface) * sign, nan=-1.0) > 0.5 * contrast
     quarters = np.array_split(np.arange(n_columns), 4)
     share = np.stack([marked[:, q].mean(axis=1) for q in quarters], axis=1)        # (rows, 4)
@@ -170,18 +220,20 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     is_bar = spans_all & (coverage >= 0.8)
     is_stripes = spans_all & (runs >= 3)
     band = is_bar | is_stripes
+    if unresolved:
+        # stripes are not told from a bar: a band across the width is the marking
+        band = spans_all & (coverage >= unresolved_coverage)
     # the first band of at least two lines (1 px), nearest the pavement's start
     hits = np.nonzero(band[:-1] & band[1:])[0]
     if not len(hits):
-        return None
+        return doubtful
     first = int(hits[0])
     d_band = float(depths[first])
     widths_in = (fx / d_band - fx / d_pavement) / width_k
     if not (min_pavement_widths <= widths_in <= max_pavement_widths):
-        return None
+        return doubtful
     # the band's near edge to a fraction of a pixel: the mean level across the width crossing
     # midway between the plain pavement before it and the band
-    level = np.nanmean(np.where(inside, values, np.nan), axis=1)
     j_band = slice(first, min(len(depths), first + 3))
     j_plain = slice(max(0, first - 6), max(0, first - 1))
     band_level = float(np.nanmean(level[j_band]))

@@ -258,3 +258,31 @@ def test_a_runway_beside_a_more_contrasted_parallel_taxiway_is_found_in_the_chro
     assert result.found, result.reason
     assert errors["edge_px"] < 1.0, errors
     assert not errors["gross"], errors
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("distance, placed", [(2500.0, True), (3680.0, False)])
+def test_a_displaced_threshold_too_far_to_resolve_its_stripes_is_placed_or_withheld(distance, placed):
+    """The robustness study's displaced threshold (300 m of pavement before it, a white bar across
+    the width at the threshold), 1024 px: the first 0.8 runway widths of pavement span under a
+    pixel, so the threshold-marking search did not run and the threshold was put where the
+    pavement begins, 10.2 and 9.1 px before the true one (found, no doubt). At 2500 m the bar is
+    a line across the width after 5 px of plain pavement: the threshold must be on it (both
+    corners within 1 px of the exact labels). At 3680 m it is a 0.3 px line dimmer than the
+    pavement's own step: the threshold cannot be placed and must be withheld, not put at the
+    pavement's start."""
+    from visland.detection import detect_runway
+    from visland.detection.accuracy import frame_errors
+
+    scene = {"markings": "displaced", "pre_threshold_m": 300.0}
+    rgb, camera, state, labels = _study_frame(scene, (3000.0, 45.0), distance, 1024)
+    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    errors = frame_errors(result, camera, labels.corners_uv[0], labels.corners_visible[0], float(state.dpsi_rad[0]))
+    assert result.found, result.reason
+    assert not errors["gross"], errors
+    if placed:
+        assert result.corners_found[:2].all(), result.reason
+        assert errors["near_px"] < 1.0, errors
+    else:
+        assert not result.corners_found[:2].any(), result.reason
+        assert "threshold withheld" in result.reason
