@@ -570,6 +570,36 @@ def state_derivative(state, omega_runway_rps, with_wind: bool = True) -> list:
             0.0, 0.0, 0.0, 0.0, 0.0, state[_OMEGA] * eta * vz]
 
 
+def _heun_step(x, omega0, omega1, dt: float, with_wind: bool) -> list:
+    """One step of Heun's method on :func:`state_derivative`: ``x + dt/2 (k1 + k2)`` with
+    ``k1 = f(x, omega0)``, ``k2 = f(x + dt k1, omega1)`` (``x`` a list of floats; returns a new list).
+
+    The same floats as the two calls and the element-wise sums written with lists, on the seven
+    derivatives that are not zero (position ratios, velocity, ``W/H``): the attitude correction and
+    the wind stay as they are. Runs at every inertial step.
+    """
+    xi, zeta, eta, vx, vy, vz = x[0], x[1], x[2], x[3], x[4], x[5]
+    wx, wy, om = x[_WX], x[_WY], x[_OMEGA]
+    o0, o1, o2 = omega0[0], omega0[1], omega0[2]
+    a0, a1 = (vx - wx, vy - wy) if with_wind else (vx, vy)
+    d0, d1, d2 = eta * (vx + xi * vz), eta * (vy + zeta * vz), vz * eta * eta
+    d3, d4, d5 = o1 * vz - o2 * a1, o2 * a0 - o0 * vz, o0 * a1 - o1 * a0
+    d11 = om * eta * vz
+    mxi, mzeta, meta = xi + dt * d0, zeta + dt * d1, eta + dt * d2
+    mvx, mvy, mvz, mom = vx + dt * d3, vy + dt * d4, vz + dt * d5, om + dt * d11
+    o0, o1, o2 = omega1[0], omega1[1], omega1[2]
+    a0, a1 = (mvx - wx, mvy - wy) if with_wind else (mvx, mvy)
+    e0, e1, e2 = meta * (mvx + mxi * mvz), meta * (mvy + mzeta * mvz), mvz * meta * meta
+    e3, e4, e5 = o1 * mvz - o2 * a1, o2 * a0 - o0 * mvz, o0 * a1 - o1 * a0
+    e11 = mom * meta * mvz
+    h = 0.5 * dt
+    out = list(x)
+    out[0], out[1], out[2] = xi + h * (d0 + e0), zeta + h * (d1 + e1), eta + h * (d2 + e2)
+    out[3], out[4], out[5] = vx + h * (d3 + e3), vy + h * (d4 + e4), vz + h * (d5 + e5)
+    out[_OMEGA] = om + h * (d11 + e11)
+    return out
+
+
 def state_jacobian(state, omega_runway_rps, with_wind: bool = True) -> np.ndarray:
     """``F = d state_derivative / d state`` (12, 12).
 
@@ -913,12 +943,7 @@ class Dickmanns4D(Observer):
         R_rc = inp.R_runway_from_camera
         omega1 = (R_rc @ inp.omega_camera_rps).tolist()
         # Heun's method on the mean
-        x = self._x.tolist()
-        wind = self._with_wind
-        k1 = state_derivative(x, self._omega_prev, wind)
-        k2 = state_derivative([a + dt_s * b for a, b in zip(x, k1)], omega1, wind)
-        h = 0.5 * dt_s
-        x = [a + h * (b + c) for a, b, c in zip(x, k1, k2)]
+        x = _heun_step(self._x.tolist(), self._omega_prev, omega1, dt_s, self._with_wind)
         x[_ETA] = clip_eta(x[_ETA])
         self._omega_prev = omega1
         self._dpsi_in = float(inp.dpsi_rad)
