@@ -23,7 +23,8 @@ from scipy.spatial.transform import Rotation
 
 from tests.helpers.estimation_sims import prepared, simulation
 from visland.camera import CameraModel
-from visland.estimation.dickmanns import (NO_AIRSPEED_NOTE, STATE_NAMES, Dickmanns4DParams,
+from visland.estimation.dickmanns import (NO_AIRSPEED_NOTE, STATE_NAMES, Dickmanns4DParams, _heun_step,
+                                          _transition_matrix,
                                           line_from_normal, predict_air_data, predict_ins_velocity, predict_vision,
                                           segment_line_covariance, state_derivative, state_jacobian)
 from visland.estimation.inputs import FeatureSeries, InertialSeries, prepare_inputs
@@ -119,6 +120,23 @@ def test_model_jacobian_matches_finite_differences():
             F = state_jacobian(state, omega, wind)
             J = _fd_jacobian(lambda s: state_derivative(s, omega, wind), state)
             np.testing.assert_allclose(F, J, atol=1e-7 * max(1.0, np.abs(J).max()))
+
+
+def test_heun_step_and_transition_matrix_are_the_generic_forms_to_the_last_bit():
+    """The filter's inner loop writes Heun's method and F_d = I + F T out on floats; they must give
+    exactly the floats of the generic forms on state_derivative and state_jacobian."""
+    rng = np.random.default_rng(17)
+    for state in _random_states(rng):
+        x = state.tolist()
+        omega0, omega1 = rng.normal(0, 0.05, 3).tolist(), rng.normal(0, 0.05, 3).tolist()
+        dt = 0.02
+        for wind in (True, False):
+            k1 = state_derivative(x, omega0, wind)
+            k2 = state_derivative([a + dt * b for a, b in zip(x, k1)], omega1, wind)
+            expected = [a + 0.5 * dt * (b + c) for a, b, c in zip(x, k1, k2)]
+            assert _heun_step(x, omega0, omega1, dt, wind) == expected
+            np.testing.assert_array_equal(_transition_matrix(x, omega1, wind, 0.04),
+                                          np.eye(12) + state_jacobian(x, omega1, wind) * 0.04)
 
 
 def test_line_from_normal_jacobian():
