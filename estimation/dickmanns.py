@@ -103,7 +103,6 @@ from scipy.linalg.lapack import dposv as _dposv
 
 from visland.estimation.base import Estimate, Observer, ObserverInput, ObserverParams, clip_eta
 from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M, Deviations, deviations_from_lines
-from visland.estimation.lines_model import inputs_of, pair_observability
 
 __all__ = ["Dickmanns4D", "Dickmanns4DParams", "STATE_NAMES", "rotation_correction", "line_normals_runway",
            "line_from_normal", "predict_vision", "predict_air_data", "predict_ins_velocity", "state_derivative",
@@ -695,8 +694,12 @@ def segment_line_covariance(a_xy, b_xy, m_reference, sigma: float) -> tuple:
     E. D. Dickmanns, F.-R. Schell, "Autonomous landing of airplanes by dynamic machine vision"
     (seed 004), sec. 3 (measurement noise of the border windows), replaced here by lines (departure 5).
     """
-    a0, a1 = float(a_xy[0]), float(a_xy[1])
-    b0, b1 = float(b_xy[0]), float(b_xy[1])
+    return _segment_line_covariance(float(a_xy[0]), float(a_xy[1]), float(b_xy[0]), float(b_xy[1]), m_reference,
+                                    sigma)
+
+
+def _segment_line_covariance(a0: float, a1: float, b0: float, b1: float, m_reference, sigma: float) -> tuple:
+    """Body of :func:`segment_line_covariance` on floats (the filter's inner loop)."""
     m0, m1, m2 = a1 - b1, b0 - a0, a0 * b1 - a1 * b0              # (a0, a1, 1) x (b0, b1, 1)
     if m0 * m_reference[0] + m1 * m_reference[1] + m2 * m_reference[2] < 0:
         m0, m1, m2 = -m0, -m1, -m2
@@ -715,6 +718,24 @@ def segment_line_covariance(a_xy, b_xy, m_reference, sigma: float) -> tuple:
     gb_r = -jr0 * n1 + jr1 * n0 + jr2 * (a0 * n1 - a1 * n0)
     s2 = sigma * sigma
     return (s2 * (ga_t * ga_t + gb_t * gb_t), s2 * (ga_t * ga_r + gb_t * gb_r), s2 * (ga_r * ga_r + gb_r * gb_r))
+
+
+def _edge_pair_observability(y, v, n) -> float:
+    """:func:`visland.estimation.lines_model.pair_observability` of the edges ``y[:4]`` (``(theta, rho)``
+    of the left and right edge) for the camera velocity ``v`` and runway down axis ``n`` (camera
+    axes, floats): the same floats (its ``Phi`` terms written out; the rotation terms ``g`` do not
+    enter thesis 3.40)."""
+    v0, v1, v2 = v
+    n0, n1, n2 = n
+    phi = []
+    for theta, rho in ((y[0], y[1]), (y[2], y[3])):
+        c = math.cos(theta)
+        s = math.sin(theta)
+        speed = c * v0 + s * v1 - rho * v2
+        phi.append(-(n0 * s - n1 * c) * speed)
+        phi.append(-(rho * (n0 * c + n1 * s) + n2) * speed)
+    ptl, prl, ptr, prr = phi
+    return ptl * ptl + prl * prl + ptr * ptr + prr * prr
 
 
 def _body_y_runway(inp: ObserverInput) -> tuple:
@@ -1007,8 +1028,9 @@ class Dickmanns4D(Observer):
             rows = (0, 1, 2, 3) if with_threshold else (0, 1, 3)
             h, M_C, M = _vision_rows(s, R_rc, rows, H, n_diag)
             z = [0.0] * len(h)
+            lines = measurement.tolist()
             for k in range(2):
-                z[2 * k], z[2 * k + 1] = _aligned(float(measurement[k, 1]), float(measurement[k, 0]), h[2 * k])
+                z[2 * k], z[2 * k + 1] = _aligned(lines[k][1], lines[k][0], h[2 * k])
             k = 2
             if with_threshold:
                 (a0, a1), (b0, b1) = _threshold_points(points, R_rc)
@@ -1020,7 +1042,7 @@ class Dickmanns4D(Observer):
             innovation += [z[i] - h[i] for i in range(len(h))]
             self._vision_covariance(s, M, M_C, with_threshold, R, n_diag)
             # thesis 3.40 on the predicted edges (the line observers' index)
-            self._observability = float(pair_observability(h[:4], inputs_of(inp)))
+            self._observability = _edge_pair_observability(h, inp.v_camera_mps.tolist(), inp.n_camera.tolist())
         # Kalman update (Maybeck, the seed's [8]): K = P H^T S^-1, P <- P - K S K^T; S is symmetric
         # positive definite, so its Cholesky factor solves for K^T (LAPACK dposv: a third of the
         # time numpy.linalg.solve takes on 13 x 13, most of which is call overhead)
@@ -1049,29 +1071,24 @@ class Dickmanns4D(Observer):
         (mx0, mx1, mx2), (my0, my1, my2), (mz0, mz1, mz2) = M
         xi, zeta, omega, eta = s[_XI], s[_ZETA], s[_OMEGA], s[_ETA]
 
-        def image_point(d0, d1):                  # the runway-axes direction (d0, d1, 1) -> normalised image point
-            c2 = d0 * mx2 + d1 * my2 + mz2
-            if c2 <= 1e-9:
-                return None
-            return (d0 * mx0 + d1 * my0 + mz0) / c2, (d0 * mx1 + d1 * my1 + mz1) / c2
-
         # the threshold corners and the points noise_edge_length_m along each edge, seen from the
-        # camera (runway-axes directions divided by H)
+        # camera (runway-axes directions (d0, d1, 1) divided by H, turned into normalised image points)
         far_x = p.noise_edge_length_m * eta - xi
         left, right = -0.5 * omega - zeta, 0.5 * omega - zeta
-        near_left = image_point(-xi, left)
-        near_right = image_point(-xi, right)
-        blocks = [(near_left, image_point(far_x, left), M_C[0]), (near_right, image_point(far_x, right), M_C[1])]
-        sigmas = [sigma, sigma]
+        points = []
+        for d0, d1 in ((-xi, left), (far_x, left), (-xi, right), (far_x, right)):
+            c2 = d0 * mx2 + d1 * my2 + mz2
+            points.append(None if c2 <= 1e-9 else ((d0 * mx0 + d1 * my0 + mz0) / c2, (d0 * mx1 + d1 * my1 + mz1) / c2))
+        near_left, far_left, near_right, far_right = points
+        blocks = [(near_left, far_left, M_C[0], sigma), (near_right, far_right, M_C[1], sigma)]
         if with_threshold:
-            blocks.append((near_left, near_right, M_C[2]))
-            sigmas.append(sigma * p.threshold_sigma_factor)
+            blocks.append((near_left, near_right, M_C[2], sigma * p.threshold_sigma_factor))
         i = i0
-        for (a, b, m), sigma_k in zip(blocks, sigmas):
+        for a, b, m, sigma_k in blocks:
             if a is None or b is None:
                 R[i, i] = R[i + 1, i + 1] = 1e2
             else:
-                R[i, i], R[i, i + 1], R[i + 1, i + 1] = segment_line_covariance(a, b, m, sigma_k)
+                R[i, i], R[i, i + 1], R[i + 1, i + 1] = _segment_line_covariance(a[0], a[1], b[0], b[1], m, sigma_k)
                 R[i + 1, i] = R[i, i + 1]
             i += 2
         R[i, i] = R[i + 1, i + 1] = p.horizon_sigma_rad ** 2
