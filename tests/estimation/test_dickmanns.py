@@ -23,11 +23,12 @@ from scipy.spatial.transform import Rotation
 
 from tests.helpers.estimation_sims import prepared, simulation
 from visland.camera import CameraModel
-from visland.estimation.dickmanns import (NO_AIRSPEED_NOTE, STATE_NAMES, Dickmanns4DParams, _heun_step,
-                                          _transition_matrix,
+from visland.estimation.dickmanns import (NO_AIRSPEED_NOTE, STATE_NAMES, Dickmanns4DParams,
+                                          _edge_pair_observability, _heun_step, _transition_matrix,
                                           line_from_normal, predict_air_data, predict_ins_velocity, predict_vision,
                                           segment_line_covariance, state_derivative, state_jacobian)
 from visland.estimation.inputs import FeatureSeries, InertialSeries, prepare_inputs
+from visland.estimation.lines_model import pair_observability
 from visland.estimation.metrics import error_at_height
 from visland.estimation.registry import make_observer
 from visland.estimation.runner import run_observer
@@ -137,6 +138,15 @@ def test_heun_step_and_transition_matrix_are_the_generic_forms_to_the_last_bit()
             assert _heun_step(x, omega0, omega1, dt, wind) == expected
             np.testing.assert_array_equal(_transition_matrix(x, omega1, wind, 0.04),
                                           np.eye(12) + state_jacobian(x, omega1, wind) * 0.04)
+
+
+def test_edge_pair_observability_is_thesis_3_40_of_the_line_observers_to_the_last_bit():
+    rng = np.random.default_rng(19)
+    for _ in range(20):
+        y = [rng.uniform(-1.5, 1.5), rng.normal(0, 0.3), rng.uniform(-1.5, 1.5), rng.normal(0, 0.3)]
+        v, w, n = rng.normal(0, 40, 3).tolist(), rng.normal(0, 0.05, 3).tolist(), rng.normal(0, 1, 3).tolist()
+        u = (*v, *w, *n, rng.normal())
+        assert _edge_pair_observability(y, v, n) == pair_observability(y, u)
 
 
 def test_line_from_normal_jacobian():
