@@ -75,6 +75,9 @@ NOT_SCALED_PX = (
     "crossing_min_sigma_px", "pencil_fit_min_sigma_px", "duplicate_gap_px", "pencil_step_halfspan_px",
     "pencil_join_tolerance_px", "refine_min_band_px", "max_line_residual_px", "reference_side_px",
     "reference_focal_px",
+    # profile lengths across a line's boundary, sub-pixel by nature (refine)
+    "chroma_min_length_px", "chroma_inside_margin_px", "chroma_outside_reach_px", "chroma_step_band_px",
+    "net_step_outside_px", "net_step_inside_px",
     # candidate lines' sub-pixel profile lengths and floors (candidates)
     "check_min_span_px", "check_transition_halfspan_px", "check_transition_side_px", "check_line_min_sigma_px",
     # the measurement's sub-pixel floors, blur and resolution limits (detector)
@@ -305,6 +308,21 @@ class DetectorParams(ParamsFile):
         ... and its points cover at least this fraction of the grey line's span.
     chroma_samples : int
         Chroma profiles sampled along a boundary.
+    chroma_min_length_px : float
+        A grey boundary shorter than this is not moved onto the chroma.
+    chroma_inside_margin_px, chroma_outside_reach_px : float
+        The chroma boundary is searched from the border stripe's reach plus the first inside
+        the grey line to the second outside it (pixels).
+    chroma_step_band_px : tuple of 2 float
+        The chroma's rise across a located boundary: mean between these distances outside minus
+        the same inside (pixels).
+    boundary_flank_ratio : float
+        Walking outwards from a region boundary's strongest step, an opposite step reaching this
+        fraction of its slope is a border stripe's outer flank, the boundary
+        (:func:`refine.boundary_offsets`).
+    net_step_outside_px, net_step_inside_px : tuple of 2 float
+        A boundary's net grey-level change: mean between the first's distances outside it minus
+        the mean between the second's distances inside the border stripe's reach (pixels).
     min_edge_support : float
         Smallest fraction of a line's profiles that must hold an inlying edge.
     max_line_residual_px : float
@@ -595,6 +613,13 @@ class DetectorParams(ParamsFile):
     chroma_min_change: float = 8.0
     chroma_min_span: float = 0.6
     chroma_samples: int = 64
+    chroma_min_length_px: float = 4.0
+    chroma_inside_margin_px: float = 1.0
+    chroma_outside_reach_px: float = 1.5
+    chroma_step_band_px: tuple = (1.0, 3.0)
+    boundary_flank_ratio: float = 0.3
+    net_step_outside_px: tuple = (1.0, 3.0)
+    net_step_inside_px: tuple = (0.5, 3.0)
     min_edge_support: float = 0.45
     max_line_residual_px: float = 1.5
     min_contrast: float = 6.0
@@ -727,6 +752,9 @@ class DetectorParams(ParamsFile):
         "refine_min_band_px": (0.5, 100.0), "refine_net_fraction": (0.0, 10.0), "refine_weak_fraction": (0.0, 1.0),
         "refine_run_gap_px": (0.0, 10000.0), "refine_run_gap_fraction": (0.0, 1.0),
         "chroma_min_change": (0.0, 255.0), "chroma_min_span": (0.0, 1.0), "chroma_samples": (3, 100000, "int"),
+        "chroma_min_length_px": (1.0, 1000.0), "chroma_inside_margin_px": (0.0, 100.0),
+        "chroma_outside_reach_px": (0.0, 100.0), "chroma_step_band_px": (0.0, 100.0),
+        "boundary_flank_ratio": (0.0, 10.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
         "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),

@@ -708,7 +708,8 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
                                             step_px=BOUNDARY_STEP_PX if (kind == "edge" and outward) else 1.0)
         window = np.abs(offsets)[None, :] <= halfwidth[:, None]
         if kind == "edge" and outward:
-            position, strength = boundary_offsets(profiles, offsets, outward, window, stripe_reach)
+            position, strength = boundary_offsets(profiles, offsets, outward, window, stripe_reach,
+                                                  flank_ratio=params.boundary_flank_ratio)
             contrast = strength / RAMP_SLOPE_PER_STEP
         elif kind == "edge":
             position, strength = edge_offsets(profiles, offsets, polarity, window=window)
@@ -729,7 +730,8 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
             # the region's boundary separates its inside (past a border stripe) from its outside:
             # a marking's edge inside the region (its grey level against the surface) or a texture
             # edge outside it does not change the grey level the way the boundary does
-            net = _net_step(profiles, offsets, position, outward, stripe_reach)
+            net = _net_step(profiles, offsets, position, outward, stripe_reach, params.net_step_outside_px,
+                            params.net_step_inside_px)
             sign = net_polarity or int(np.sign(median_of(net[keep])) or 1)
             keep &= net * sign >= params.refine_net_fraction * median_of(np.abs(net[keep]))
             why += f", {int(keep.sum())} changing the grey level the boundary's way"
@@ -818,17 +820,18 @@ def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float,
     min_change, min_span = params.chroma_min_change, params.chroma_min_span
     line = fit.line
     t0, t1 = fit.extent
-    if not (math.isfinite(t0) and math.isfinite(t1)) or t1 - t0 < 4.0:
-        return NoFit("the grey boundary is shorter than 4 px")
+    if not (math.isfinite(t0) and math.isfinite(t1)) or t1 - t0 < params.chroma_min_length_px:
+        return NoFit(f"the grey boundary is shorter than {params.chroma_min_length_px:g} px")
     n = int(max(3, min(params.chroma_samples, math.floor(t1 - t0) + 1)))
     t = np.linspace(t0, t1, n)
     centres = line.point + t[:, None] * line.direction
-    profiles, offsets = sample_profiles(colour, centres, line.normal, line.direction, reach_px + 5.0, step_px=0.5)
+    profiles, offsets = sample_profiles(colour, centres, line.normal, line.direction, reach_px + 5.0,
+                                        step_px=BOUNDARY_STEP_PX)
     out_dir = 1.0 if outward >= 0 else -1.0
     rel = offsets * out_dir                                   # > 0 towards the outside
     g = np.full(profiles.shape, np.nan, np.float32)
     g[:, 1:-1] = (profiles[:, 2:] - profiles[:, :-2]) * out_dir          # rise towards the outside, per pixel
-    window = (rel >= -reach_px - 1.0) & (rel <= 1.5)
+    window = (rel >= -reach_px - params.chroma_inside_margin_px) & (rel <= params.chroma_outside_reach_px)
     rising = np.where(np.isfinite(g) & window[None, :], g, -np.inf)
     peak = np.argmax(rising, axis=1)
     rows = np.arange(n)
@@ -846,8 +849,9 @@ def chroma_boundary(colour, fit: LineFit, outward: int, reach_px: float,
         with np.errstate(invalid="ignore", divide="ignore"):
             return (values * mask).sum(axis=1) / mask.sum(axis=1)
 
-    change = mean((rel[None, :] >= here + 1.0) & (rel[None, :] <= here + 3.0)) \
-        - mean((rel[None, :] <= here - 1.0) & (rel[None, :] >= here - 3.0))
+    near, far = params.chroma_step_band_px
+    change = mean((rel[None, :] >= here + near) & (rel[None, :] <= here + far)) \
+        - mean((rel[None, :] <= here - near) & (rel[None, :] >= here - far))
     keep = np.isfinite(rising[rows, peak]) & np.isfinite(position) & (change >= min_change)
     covered = float(np.ptp(t[keep]) / (t1 - t0)) if keep.sum() >= 2 else 0.0
     if keep.sum() < 3 or covered < min_span:
@@ -882,14 +886,15 @@ def _fit_statistics(line: PixelLine, points: np.ndarray, min_sigma_px: float = 0
 
 
 def _net_step(profiles: np.ndarray, offsets: np.ndarray, position: np.ndarray, outward: int,
-              stripe_reach) -> np.ndarray:
-    """Grey level just outside a located boundary minus inside it past a border stripe."""
+              stripe_reach, outside_px: tuple, inside_px: tuple) -> np.ndarray:
+    """Grey level just outside a located boundary (between ``outside_px`` beyond it) minus inside
+    it past a border stripe (between ``inside_px`` beyond the stripe's reach)."""
     out_dir = 1.0 if outward >= 0 else -1.0
     pos = np.nan_to_num(position)[:, None] * out_dir
     reach = np.broadcast_to(np.asarray(stripe_reach, float), (len(profiles),))[:, None]
     rel = offsets[None, :] * out_dir - pos
-    outside = (rel >= 1.0) & (rel <= 3.0)
-    inside = (rel <= -reach - 0.5) & (rel >= -reach - 3.0)
+    outside = (rel >= outside_px[0]) & (rel <= outside_px[1])
+    inside = (rel <= -reach - inside_px[0]) & (rel >= -reach - inside_px[1])
     finite = np.isfinite(profiles)
 
     def mean(mask):
