@@ -659,7 +659,7 @@ def _refine_edges(ctx: _Context, hypothesis: RunwayHypothesis, prediction: Predi
     # ends, texture lined up with an edge would turn the fit)
     extent = surface_extent(extent_image, horizon, hypothesis.s0, hypothesis.k_left, hypothesis.k_right,
                             (hypothesis.d_far, hypothesis.d_near), (1.0, bottom_depth), marking_fraction=0.0,
-                            max_rows=params.edge_surface_rows)
+                            max_rows=params.edge_surface_rows, params=params)
     d_lo, d_hi = (hypothesis.d_far, hypothesis.d_near) if extent is None else extent
     inset = params.edge_depth_inset_fraction * (d_hi - d_lo)
     for name, k, outward in (("left", hypothesis.k_left, -1), ("right", hypothesis.k_right, 1)):
@@ -793,7 +793,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
     k_right_through_vp = (pair.s0_right + pair.k_right * d_mid - s0_vp) / d_mid
     in_chroma = extent_image is not None and extent_image is not ctx.image
     extent = surface_extent(extent_image if in_chroma else ctx.image, horizon, s0_vp, k_left_through_vp,
-                            k_right_through_vp, (d_far, d_near), (1.0, bottom_depth))
+                            k_right_through_vp, (d_far, d_near), (1.0, bottom_depth), params=params)
     d_near_expected, d_far_expected = d_near, d_far
     surface_level = math.nan
     if extent is not None:

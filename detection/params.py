@@ -83,8 +83,10 @@ NOT_SCALED_PX = (
     # the measurement's sub-pixel floors, blur and resolution limits (detector)
     "edge_band_min_px", "edge_image_margin_px", "edge_blur_px", "chroma_resolved_stripe_px", "vp_line_min_sigma_px",
     "centre_band_min_px", "centre_min_width_px", "confidence_residual_px",
-    # depth margins of the measurement (detector) kept at their 2048 px values at every size
-    # (not measured scaled yet): a change here moves results at other frame sizes
+    # depth margins of the measurement (detector) kept at their 2048 px values at every size:
+    # scaled with the frame they did worse at 1024 px (benchmarks/detection_robustness.py --size
+    # 1024: 69.3 % found, 7 gross against 70.0 %, 6 gross; raycast_approach.py --size 1024 --fps 1
+    # unchanged, 95.2 %, 0 gross); ground_margin_px also moves the acquisition's Hough crop
     "ground_margin_px", "roi_min_side_px", "centre_image_margin_px", "threshold_window_min_px",
     "border_clearance_px", "threshold_exit_margin_px", "pavement_search_px", "pavement_min_move_px",
     "pavement_window_px", "pavement_agreement_px",

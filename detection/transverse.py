@@ -30,6 +30,7 @@ import cv2
 import numpy as np
 
 from visland.detection.horizon import HorizonFrame, meet_h
+from visland.detection.params import DetectorParams
 from visland.detection.pencil import as_slice, finite_median, rectify, row_mean, row_quantile
 from visland.detection.refine import MAD_TO_SIGMA, PixelLine, chroma_of, median_of
 
@@ -92,7 +93,8 @@ class TransverseLine:
 
 def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_right: float,
                    d_support: tuple, d_window: tuple, step_d_px: float = 0.5,
-                   marking_fraction: float = 1.2, max_rows: int = 800) -> SurfaceExtent | None:
+                   marking_fraction: float = 1.2, max_rows: int = 800,
+                   params: DetectorParams | None = None) -> SurfaceExtent | None:
     """Depths ``(d_far, d_near)`` where the runway's surface ends, from rows of the frame
     resampled on lines through the vanishing point.
 
@@ -127,12 +129,17 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
         Reach of a band of blended threshold markings along the runway, in runway widths.
     max_rows : int, optional
         Most rows resampled (rows spaced geometrically when the cap is reached).
+    params : DetectorParams, optional
+        The strip as the trapezoid model reads it: ``strip_inside_band`` (the surface between
+        the edges), ``strip_side_band`` (the ground beside each), ``strip_core_margin`` (the
+        reference rows) and ``strip_level_fraction`` (a row is the runway's).
 
     Returns
     -------
     SurfaceExtent or None
         None when the surface cannot be told from the ground at the reference depths.
     """
+    params = params or DetectorParams()
     width = k_right - k_left
     # rows every half pixel near the horizon and at most max_rows of them (geometric beyond)
     n_rows = int(min(max_rows, max(8, (d_window[1] - d_window[0]) / step_d_px + 1)))
@@ -142,16 +149,19 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     if rect is None:
         return None
     f = (rect.k - k_left) / width
-    inside = as_slice((f >= 0.1) & (f <= 0.9))
-    beside = (as_slice((f >= -0.38) & (f <= -0.12)), as_slice((f >= 1.12) & (f <= 1.38)))
+    in_lo, in_hi = params.strip_inside_band
+    side_in, side_out = params.strip_side_band
+    inside = as_slice((f >= in_lo) & (f <= in_hi))
+    beside = (as_slice((f >= -side_out) & (f <= -side_in)), as_slice((f >= 1.0 + side_in) & (f <= 1.0 + side_out)))
     with np.errstate(invalid="ignore"):
         # the ground beside each edge separately: a taxiway joining one side makes that side
         # paved for a while, the other side still tells the runway from its surroundings
         out_levels = [row_quantile(rect.values[:, side], 0.5) for side in beside]
         low = row_quantile(rect.values[:, inside], 0.25)
         high = row_quantile(rect.values[:, inside], 0.75)
-    core = (rect.d >= d_support[0] + 0.2 * (d_support[1] - d_support[0])) & \
-        (rect.d <= d_support[1] - 0.2 * (d_support[1] - d_support[0]))
+    core_margin = params.strip_core_margin
+    core = (rect.d >= d_support[0] + core_margin * (d_support[1] - d_support[0])) & \
+        (rect.d <= d_support[1] - core_margin * (d_support[1] - d_support[0]))
     if core.sum() < 2:
         return None
     out_level = row_mean(np.stack(out_levels, axis=1))          # both sides (a band's reference)
@@ -163,7 +173,8 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
         contrast = surface - level
         reference_side = finite_median(contrast[core])
         if np.isfinite(reference_side) and abs(reference_side) >= 2.0 and (reference_side < 0) == darker:
-            runway |= np.nan_to_num(contrast * np.sign(reference_side)) > 0.5 * abs(reference_side)
+            runway |= (np.nan_to_num(contrast * np.sign(reference_side))
+                       > params.strip_level_fraction * abs(reference_side))
             references.append(reference_side)
     if not references:
         return None
