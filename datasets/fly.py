@@ -84,7 +84,10 @@ class MonitorParams:
     Start. The measurements reach the heading estimate and the observers only once the detection
     passes the same test as at a decision height over a full window (found in ``min_found_fraction``
     of the last ``window_s``, median confidence ``min_confidence``), on a found frame; until then
-    the aircraft flies wings level at the vertical speed it started with. Far out a runway a few pixels wide is found
+    the aircraft flies wings level at the vertical speed it started with, for at most
+    ``max_acquisition_s`` (then it goes around, the runway not acquired: without that bound a start
+    15 deg off the runway heading, thesis-8-mc40 at 512 px, flew level past the runway for 400 s
+    without the measurements ever being trusted). Far out a runway a few pixels wide is found
     in one frame of two or fewer, and those first detections are the least reliable: on
     thesis-2-mc1 at 512 px (5.7 km, runway 5 px wide) the first acquisition took a parallel
     object 21 px to the side, and kf-2p, started on it, was sent to dH 1900-2500 m and rejected
@@ -114,6 +117,9 @@ class MonitorParams:
         Smallest accumulated corner motion due to the translation (px of the camera, "depth flow").
     agreement_below_ft : float
         The agreement is judged below this true height (ft) only.
+    max_acquisition_s : float
+        Longest time (s) from the start of the approach to the measurements being trusted
+        ("Start"); beyond it the approach is abandoned (go-around) whatever the height.
 
     References
     ----------
@@ -130,6 +136,7 @@ class MonitorParams:
     max_coast_s: float = 0.5              # the guidance observer's time since its last correction
     min_depth_flow_px: float = 20.0       # accumulated corner motion due to the translation (see above)
     agreement_below_ft: float = 300.0     # the line observer converges later: agreement judged below this height only
+    max_acquisition_s: float = 30.0       # the measurements trusted within this time of the start, or a go-around
 
 
 @dataclass(frozen=True)
@@ -533,6 +540,7 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
     frozen_until = None
     trusted_from = None       # where the measurements were first trusted (MonitorParams, "Start")
     hdot_start_mps = -float(model.current().v_ned_mps[2])
+    t_start_s = float(model.current().t_s)
     k = 0
     max_steps = int(400 * 50)
     while k < max_steps:
@@ -606,6 +614,17 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
                     "dh_err_m": float(h_true - dh_seen) if math.isfinite(dh_seen) else None}
                 if h_ft == 100.0 and math.isfinite(dh_seen):
                     dh_err_100 = float(h_true - dh_seen)
+
+        # ---- the runway not acquired in time (MonitorParams, "Start")
+        if trusted_from is None and not go_around and not monitor_would_go_around \
+                and t - t_start_s > options.monitor.max_acquisition_s:
+            _, why = _detection_test(options.monitor, frames_log, t)
+            why = (f"runway not acquired: measurements not trusted within {options.monitor.max_acquisition_s:g} s "
+                   f"of the start ({why or 'the last second passed the detection test only now'})")
+            if options.truth_guided:
+                monitor_would_go_around = why
+            else:
+                go_around, go_around_reason, go_around_t = True, why, t
 
         # ---- monitor at the decision heights
         if not go_around and heights_pending and h_true <= heights_pending[0] * FT_TO_M:

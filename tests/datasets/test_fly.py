@@ -57,6 +57,18 @@ def test_losing_the_runway_below_150_ft_is_a_go_around_at_100_ft():
 
 
 @pytest.mark.slow
+def test_an_approach_whose_measurements_are_never_trusted_goes_around_after_the_acquisition_time():
+    """The runway never found (lost below 5000 ft, i.e. from the start) 5 km out in level flight:
+    no estimate, and a go-around once max_acquisition_s has passed, not a level flight past
+    the runway."""
+    level = Scenario("level-5km", dx_m=-5000.0, dy_m=0.0, dgs_m=-25.0, dpsi_deg=0.0, gamma_deg=0.0)
+    run = fly(level, FlyOptions(seed=3, detection_lost_below_ft=5000.0))
+    assert run["go_around"] and run["measurements_trusted_from"] is None
+    assert run["go_around_reason"].startswith("runway not acquired: measurements not trusted within 30 s")
+    assert "runway found in 0%" in run["go_around_reason"]
+    assert max(row[0] for row in run["trace"]["rows"]) == pytest.approx(30.0, abs=0.05)
+
+
 def test_the_truth_guided_baseline_lands_and_records_what_the_monitor_would_have_decided():
     run = fly(_short(), FlyOptions(seed=3, detection_lost_below_ft=150.0, truth_guided=True))
     assert not run["go_around"] and 60.0 <= run["touchdown_x_m"] <= 823.0
