@@ -373,7 +373,10 @@ def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
     lines = check_lines(ctx.image, horizon, candidate_lines(segments, horizon, params), params)
     bottom_depth = _deepest_visible(horizon, ctx.camera.width, ctx.camera.height)
     hypotheses = runway_hypotheses(ctx.image, horizon, lines, params, prediction, bottom_depth_px=bottom_depth)
-    chroma = ctx.ground_chroma(roi) if prediction is None and hypotheses else None
+    # (the chroma is computed only when the grey levels' best is a convincing strip: the one case
+    # where a wider strip in the chroma takes its place)
+    chroma = (ctx.ground_chroma(roi) if prediction is None and hypotheses and ctx.colour is not None
+              and is_convincing_strip(hypotheses[0], params) else None)
     if chroma is not None:
         hypotheses = _wider_strip_in_chroma(hypotheses, chroma, ctx, lines, bottom_depth)
     if not hypotheses:
