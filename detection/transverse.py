@@ -108,6 +108,13 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     along it (ICAO threshold stripes and the strip before them: 36 m on a 45 m runway), in
     depth ``marking_fraction * width_px * d / fx``.
 
+    A runway's surface can change along it: a concrete runway darkened by rubber in its
+    touchdown zones is darker than grass there and brighter at its clean ends. Past either end
+    of the run of runway rows, across at most a runway width of rows where the surface's level
+    crosses the ground's, rows whose quartile lies on the other side of both sides' ground level
+    (by ``strip_level_fraction`` of the middle's contrast) carry the runway on to where they
+    end, gaps in them (a pavement joining one side) bridged as in the run.
+
     Parameters
     ----------
     image : ndarray of uint8, shape (H, W)
@@ -168,20 +175,25 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     darker = finite_median(low[core] - out_level[core]) < 0
     surface = low if darker else high
     runway = np.zeros(len(rect.d), dtype=bool)
+    flipped_sides = np.zeros(len(rect.d), dtype=int)
     references = []
     for level in out_levels:
-        contrast = surface - level
-        reference_side = finite_median(contrast[core])
+        reference_side = finite_median((surface - level)[core])
         if np.isfinite(reference_side) and abs(reference_side) >= 2.0 and (reference_side < 0) == darker:
-            runway |= (np.nan_to_num(contrast * np.sign(reference_side))
-                       > params.strip_level_fraction * abs(reference_side))
+            contrast = np.nan_to_num((surface - level) * np.sign(reference_side))
+            runway |= contrast > params.strip_level_fraction * abs(reference_side)
+            flipped_sides += contrast < -params.strip_level_fraction * abs(reference_side)
             references.append(reference_side)
     if not references:
         return None
     reference = float(median_of(references))
+    # the surface on the other side of both sides' ground level, three quarters of the row at
+    # least (the quartile read is the one markings do not move): the same runway, its surface
+    # changing along it (a concrete runway darkened by rubber in its touchdown zones is darker
+    # than grass there and brighter at its ends; one side's ground alone can be a brighter patch)
+    flipped = flipped_sides == len(references)
     # majority over three rows, then the run of runway rows holding the core
-    padded = np.concatenate([[runway[0]], runway, [runway[-1]]]).astype(int)
-    runway = (padded[:-2] + padded[1:-1] + padded[2:]) >= 2
+    runway, flipped = _majority_of_three(runway), _majority_of_three(flipped)
     centre = int(np.nonzero(core)[0][len(np.nonzero(core)[0]) // 2])
     if not runway[centre]:
         return None
@@ -216,8 +228,25 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
                 return index
             index = k
 
-    lo = extend(centre, -1)
-    hi = extend(centre, +1)
+    def extend_flipped(index, direction):
+        # past the run's end, across the rows where the surface's level crosses the ground's
+        # (a runway width at most), flipped rows, each gap in them (a pavement joining one
+        # side) a runway width at most, long enough together not to be a marking
+        end, n_flipped = index, 0
+        while True:
+            limit = gap_limit(rect.d[end])
+            j = end + direction
+            while 0 <= j < len(runway) and not flipped[j] and abs(rect.d[j] - rect.d[end]) <= limit:
+                j += direction
+            if not (0 <= j < len(runway) and flipped[j]):
+                return end if n_flipped >= 3 else index
+            end = j
+            while 0 <= end + direction < len(runway) and flipped[end + direction]:
+                end += direction
+            n_flipped += abs(end - j) + 1
+
+    lo = extend_flipped(extend(centre, -1), -1)
+    hi = extend_flipped(extend(centre, +1), +1)
     # then across a band of blended markings (grey level on the other side of the ground's)
     median = row_quantile(rect.values[:, inside], 0.5)
     band = np.nan_to_num((median - out_level) * -np.sign(reference)) > 0.5 * abs(reference)
@@ -232,6 +261,12 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     while lo > 0 and band[lo - 1] and start - rect.d[lo - 1] <= reach(start):
         lo -= 1
     return SurfaceExtent(rect.d[lo], rect.d[hi], surface_level)
+
+
+def _majority_of_three(rows: np.ndarray) -> np.ndarray:
+    """Each row of a boolean row mask set when two of it and its two neighbours are."""
+    padded = np.concatenate([[rows[0]], rows, [rows[-1]]]).astype(int)
+    return (padded[:-2] + padded[1:-1] + padded[2:]) >= 2
 
 
 def edge_crossings_s(horizon: HorizonFrame, line_left: np.ndarray, line_right: np.ndarray,
