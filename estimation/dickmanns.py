@@ -699,25 +699,20 @@ def segment_line_covariance(a_xy, b_xy, m_reference, sigma: float) -> tuple:
 
 
 def _segment_line_covariance(a0: float, a1: float, b0: float, b1: float, m_reference, sigma: float) -> tuple:
-    """Body of :func:`segment_line_covariance` on floats (the filter's inner loop)."""
+    """Body of :func:`segment_line_covariance` on floats, in closed form: with ``L = |b - a|``,
+    ``G = J [dm/de_a, dm/de_b]`` is ``(-1/L, 1/L)`` for theta and ``s (|b|^2 - a.b, |a|^2 - a.b) / L^2``
+    for rho (``s`` the sign that orients ``m`` along ``m_reference``)."""
     m0, m1, m2 = a1 - b1, b0 - a0, a0 * b1 - a1 * b0              # (a0, a1, 1) x (b0, b1, 1)
-    if m0 * m_reference[0] + m1 * m_reference[1] + m2 * m_reference[2] < 0:
-        m0, m1, m2 = -m0, -m1, -m2
     h2 = m0 * m0 + m1 * m1
     if h2 < 1e-30:
         return 1e6, 0.0, 1e6
-    h = math.sqrt(h2)
-    h3 = h2 * h
-    n0, n1 = m0 / h, m1 / h
-    jt0, jt1 = -m1 / h2, m0 / h2
-    jr0, jr1, jr2 = m2 * m0 / h3, m2 * m1 / h3, -1.0 / h
-    # columns dm/de_a = (n1, -n0, n0 b1 - n1 b0), dm/de_b = (-n1, n0, a0 n1 - a1 n0)
-    ga_t = jt0 * n1 - jt1 * n0
-    gb_t = -ga_t
-    ga_r = jr0 * n1 - jr1 * n0 + jr2 * (n0 * b1 - n1 * b0)
-    gb_r = -jr0 * n1 + jr1 * n0 + jr2 * (a0 * n1 - a1 * n0)
+    ab = a0 * b0 + a1 * b1
+    ga_r = (b0 * b0 + b1 * b1 - ab) / h2
+    gb_r = (a0 * a0 + a1 * a1 - ab) / h2
+    if m0 * m_reference[0] + m1 * m_reference[1] + m2 * m_reference[2] < 0:
+        ga_r, gb_r = -ga_r, -gb_r
     s2 = sigma * sigma
-    return (s2 * (ga_t * ga_t + gb_t * gb_t), s2 * (ga_t * ga_r + gb_t * gb_r), s2 * (ga_r * ga_r + gb_r * gb_r))
+    return 2.0 * s2 / h2, s2 * (gb_r - ga_r) / math.sqrt(h2), s2 * (ga_r * ga_r + gb_r * gb_r)
 
 
 def _edge_pair_observability(y, v, n) -> float:
@@ -962,7 +957,9 @@ class Dickmanns4D(Observer):
     def _step(self, inp: ObserverInput, dt_s: float, measurement) -> Estimate:
         p = self.params
         R_rc = inp.R_runway_from_camera
-        omega1 = (R_rc @ inp.omega_camera_rps).tolist()
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R_rc.tolist()
+        w0, w1, w2 = inp.omega_camera_rps.tolist()
+        omega1 = [r00 * w0 + r01 * w1 + r02 * w2, r10 * w0 + r11 * w1 + r12 * w2, r20 * w0 + r21 * w1 + r22 * w2]
         # Heun's method on the mean
         x = _heun_step(self._x.tolist(), self._omega_prev, omega1, dt_s, self._with_wind)
         x[_ETA] = clip_eta(x[_ETA])

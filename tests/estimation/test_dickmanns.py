@@ -232,6 +232,24 @@ def test_segment_covariance_matches_monte_carlo():
     np.testing.assert_allclose([empirical[0, 0], empirical[0, 1], empirical[1, 1]], [var_t, cov, var_r], rtol=0.05)
 
 
+def test_segment_covariance_closed_form_is_the_first_order_propagation():
+    """sigma^2 G G^T with G = J(m) [dm/de_a, dm/de_b] (line_from_normal's Jacobian, the points moved
+    along the line's unit normal), on random segments and both orientations of the reference."""
+    rng = np.random.default_rng(18)
+    for _ in range(50):
+        a, b = rng.normal(0, 0.3, 2), rng.normal(0, 0.3, 2)
+        sigma = rng.uniform(1e-4, 1e-2)
+        m = np.cross([*a, 1.0], [*b, 1.0])
+        for m_ref in (m, -m):
+            mm = m if m @ m_ref >= 0 else -m
+            J = line_from_normal(mm)[1]
+            n = mm[:2] / np.linalg.norm(mm[:2])
+            G = J @ np.column_stack([np.cross([*n, 0.0], [*b, 1.0]), np.cross([*a, 1.0], [*n, 0.0])])
+            C = sigma ** 2 * G @ G.T
+            np.testing.assert_allclose(segment_line_covariance(a, b, m_ref, sigma), [C[0, 0], C[0, 1], C[1, 1]],
+                                       rtol=1e-9, atol=1e-12 * abs(C).max())
+
+
 def test_point_mass_model_follows_a_flown_trajectory():
     result = simulation("thesis-3")
     tr = result.trajectory
