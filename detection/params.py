@@ -263,6 +263,12 @@ class DetectorParams(ParamsFile):
         of the reference difference, to the ground when by at most the second.
     strip_end_rows : int
         Rows beyond a strip's end that must look like the ground for the end to count.
+    surface_min_contrast : float
+        Where the runway's surface ends (:func:`transverse.surface_extent`): the ground beside an
+        edge is used when the surface differs from it by at least this many grey levels.
+    surface_resume_fraction, surface_resume_rows : float, int
+        A gap in the surface (a pavement crossing the runway) is bridged when the rows after it
+        hold the surface's own level in at least this fraction and are at least this many.
     strip_end_clearance_px : float
         An end must lie this far from the horizon and the image bottom to count.
     parallel_score_ratio, parallel_min_width_ratio : float
@@ -591,6 +597,9 @@ class DetectorParams(ParamsFile):
     strip_level_fraction: float = 0.5
     ground_level_fraction: float = 0.25
     strip_end_rows: int = 3
+    surface_min_contrast: float = 2.0
+    surface_resume_fraction: float = 0.6
+    surface_resume_rows: int = 3
     strip_end_clearance_px: float = 3.0
     parallel_score_ratio: float = 0.3
     parallel_min_width_ratio: float = 1.3
@@ -743,7 +752,8 @@ class DetectorParams(ParamsFile):
         "centre_stripe_min_step": (0.0, 255.0), "centre_stripe_fraction": (0.0, 10.0),
         "strip_inside_band": (0.0, 1.0), "strip_side_band": (0.0, 5.0), "strip_core_margin": (0.0, 0.49),
         "strip_level_fraction": (0.0, 10.0), "ground_level_fraction": (0.0, 10.0),
-        "strip_end_rows": (1, 1000, "int"), "strip_end_clearance_px": (0.0, 1000.0),
+        "strip_end_rows": (1, 1000, "int"), "surface_min_contrast": (0.0, 255.0),
+        "surface_resume_fraction": (0.0, 1.0), "surface_resume_rows": (1, 1000, "int"), "strip_end_clearance_px": (0.0, 1000.0),
         "parallel_score_ratio": (0.0, 10.0), "parallel_min_width_ratio": (1.0, 100.0),
         "parallel_min_gap": (0.0, 100.0), "ground_between_margin": (0.0, 100.0),
         "strip_min_interior": (0.0, 10.0), "strip_max_outside_gap": (0.0, 100.0), "strip_max_spread": (0.0, 100.0),

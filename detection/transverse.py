@@ -139,7 +139,8 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     params : DetectorParams, optional
         The strip as the trapezoid model reads it: ``strip_inside_band`` (the surface between
         the edges), ``strip_side_band`` (the ground beside each), ``strip_core_margin`` (the
-        reference rows) and ``strip_level_fraction`` (a row is the runway's).
+        reference rows) and ``strip_level_fraction`` (a row is the runway's); the
+        ``surface_*`` parameters.
 
     Returns
     -------
@@ -179,7 +180,8 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     references = []
     for level in out_levels:
         reference_side = finite_median((surface - level)[core])
-        if np.isfinite(reference_side) and abs(reference_side) >= 2.0 and (reference_side < 0) == darker:
+        if (np.isfinite(reference_side) and abs(reference_side) >= params.surface_min_contrast
+                and (reference_side < 0) == darker):
             contrast = np.nan_to_num((surface - level) * np.sign(reference_side))
             runway |= contrast > params.strip_level_fraction * abs(reference_side)
             flipped_sides += contrast < -params.strip_level_fraction * abs(reference_side)
@@ -224,7 +226,8 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
             k = j
             while 0 <= k + direction < len(runway) and runway[k + direction]:
                 k += direction
-            if not (same_surface[min(j, k):max(j, k) + 1].mean() > 0.6 and abs(k - j) >= 3):
+            if not (same_surface[min(j, k):max(j, k) + 1].mean() > params.surface_resume_fraction
+                    and abs(k - j) >= params.surface_resume_rows):
                 return index
             index = k
 
