@@ -268,7 +268,9 @@ class DetectorParams(ParamsFile):
         edge is used when the surface differs from it by at least this many grey levels.
     surface_resume_fraction, surface_resume_rows : float, int
         A gap in the surface (a pavement crossing the runway) is bridged when the rows after it
-        hold the surface's own level in at least this fraction and are at least this many.
+        hold the surface's own level in at least this fraction and are at least this many; rows
+        of the surface on the other side of the ground's level past the run's end (a surface that
+        changes along the runway) carry it on when at least this many.
     strip_end_clearance_px : float
         An end must lie this far from the horizon and the image bottom to count.
     parallel_score_ratio, parallel_min_width_ratio : float

@@ -242,7 +242,7 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
             while 0 <= j < len(runway) and not flipped[j] and abs(rect.d[j] - rect.d[end]) <= limit:
                 j += direction
             if not (0 <= j < len(runway) and flipped[j]):
-                return end if n_flipped >= 3 else index
+                return end if n_flipped >= params.surface_resume_rows else index
             end = j
             while 0 <= end + direction < len(runway) and flipped[end + direction]:
                 end += direction
