@@ -818,7 +818,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
     else:
         near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                     d_near_expected, window(d_near_expected), outward=1, min_step=min_step,
-                                    colour=ctx.colour, surface_level=surface_level)
+                                    colour=ctx.colour, surface_level=surface_level, params=params)
     if near is not None and not near.spans:
         notes.append("threshold withheld: the transverse step found does not span the runway's width")
         near = None
@@ -826,7 +826,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
     far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
                                window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour,
-                               surface_level=surface_level)
+                               surface_level=surface_level, params=params)
     far_withheld = False
     if near is not None:
         # a step inside the pavement (a patch's edge, the stripes' inner edge) is not where the
@@ -843,7 +843,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             again = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                          d_ground, (d_ground - params.pavement_window_px,
                                                     min(bottom_depth, d_ground + params.pavement_window_px)), outward=1,
-                                         min_step=min_step, colour=ctx.colour, surface_level=surface_level)
+                                         min_step=min_step, colour=ctx.colour, surface_level=surface_level, params=params)
             moved = (again if again is not None and again.spans
                      and abs(again.depth_px - d_ground) <= params.pavement_agreement_px else False)
             if moved:

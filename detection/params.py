@@ -78,6 +78,11 @@ NOT_SCALED_PX = (
     # profile lengths across a line's boundary, sub-pixel by nature (refine)
     "chroma_min_length_px", "chroma_inside_margin_px", "chroma_outside_reach_px", "chroma_step_band_px",
     "net_step_outside_px", "net_step_inside_px",
+    # depth profiles' smoothing across a threshold or runway end, sub-pixel (transverse)
+    "transverse_smooth_sigma_px", "transverse_light_sigma_px",
+    # calibrated sub-pixel corrections of an area-sampled boundary (refine)
+    "boundary_flank_bias_px", "boundary_stripe_shift_px", "boundary_stripe_resolved_px",
+    "boundary_stripe_shift_scale_px",
     # candidate lines' sub-pixel profile lengths and floors (candidates)
     "check_min_span_px", "check_transition_halfspan_px", "check_transition_side_px", "check_line_min_sigma_px",
     # the measurement's sub-pixel floors, blur and resolution limits (detector)
@@ -271,6 +276,30 @@ class DetectorParams(ParamsFile):
         hold the surface's own level in at least this fraction and are at least this many; rows
         of the surface on the other side of the ground's level past the run's end (a surface that
         changes along the runway) carry it on when at least this many.
+    surface_side_margin : float
+        :func:`transverse.surface_extent` resamples the runway and this fraction of its width
+        beyond each edge.
+    surface_rect_columns : int
+        ... in at most this many columns ...
+    surface_width_samples : float
+        ... spaced (at the nearest depth searched) at most a runway width over this many, and
+        never closer than half a pixel.
+    marking_band_widths : float
+        Reach of a band of threshold markings along the runway, in runway widths (ICAO threshold
+        stripes and the strip before them: 36 m on a 45 m runway): the runway's surface carries
+        on across such a band of blended markings, and the threshold is searched that far beyond
+        where the surface seems to end (:func:`transverse.find_transverse_line`).
+    transverse_columns : int
+        The threshold and the runway's end are searched on transverse lines sampled at this many
+        points between the edges (10 % to 90 % of the width) ...
+    transverse_min_significance : float
+        ... where a step must stand out of the depth profile's noise by this factor ...
+    transverse_chroma_min_step : float
+        ... and the chroma profile's step is used when the chroma changes across it by at least
+        this many levels.
+    transverse_smooth_sigma_px, transverse_light_sigma_px : float
+        Sigmas (pixels of depth) of the Gaussians smoothing those depth profiles before they are
+        differentiated, and lightly for the fit of the boundary.
     strip_end_clearance_px : float
         An end must lie this far from the horizon and the image bottom to count.
     parallel_score_ratio, parallel_min_width_ratio : float
@@ -330,6 +359,18 @@ class DetectorParams(ParamsFile):
         Walking outwards from a region boundary's strongest step, an opposite step reaching this
         fraction of its slope is a border stripe's outer flank, the boundary
         (:func:`refine.boundary_offsets`).
+    boundary_same_step_ratio : float
+        A step of the chosen flank's sign just outside it, reaching this fraction of its slope,
+        is the region's sharper geometric edge and is taken instead (a blurred texture inside).
+    boundary_flank_bias_px : float
+        The boundary is extrapolated from the outer flank of its derivative lobe (its 60 % and
+        20 % crossings); for an area-sampled step seen through bilinear interpolation and a
+        central difference this lands this far outside, removed (calibrated).
+    boundary_stripe_shift_px, boundary_stripe_resolved_px, boundary_stripe_shift_scale_px : float
+        An unresolved border stripe's outer flank lies outside the boundary by
+        ``shift * exp(-(max(separation - resolved, 0) / scale) ** 1.5)`` pixels, ``separation``
+        between the stripe's two flanks (calibrated on area-sampled stripes 0 to 3 px wide at
+        every sub-pixel phase: mean residual within 0.12 px); removed.
     net_step_outside_px, net_step_inside_px : tuple of 2 float
         A boundary's net grey-level change: mean between the first's distances outside it minus
         the mean between the second's distances inside the border stripe's reach (pixels).
@@ -602,6 +643,15 @@ class DetectorParams(ParamsFile):
     surface_min_contrast: float = 2.0
     surface_resume_fraction: float = 0.6
     surface_resume_rows: int = 3
+    surface_side_margin: float = 0.4
+    surface_rect_columns: int = 96
+    surface_width_samples: float = 50.0
+    marking_band_widths: float = 1.2
+    transverse_columns: int = 48
+    transverse_min_significance: float = 2.5
+    transverse_chroma_min_step: float = 8.0
+    transverse_smooth_sigma_px: float = 0.8
+    transverse_light_sigma_px: float = 0.3
     strip_end_clearance_px: float = 3.0
     parallel_score_ratio: float = 0.3
     parallel_min_width_ratio: float = 1.3
@@ -631,6 +681,11 @@ class DetectorParams(ParamsFile):
     chroma_outside_reach_px: float = 1.5
     chroma_step_band_px: tuple = (1.0, 3.0)
     boundary_flank_ratio: float = 0.3
+    boundary_same_step_ratio: float = 0.6
+    boundary_flank_bias_px: float = 0.11
+    boundary_stripe_shift_px: float = 0.2
+    boundary_stripe_resolved_px: float = 1.6
+    boundary_stripe_shift_scale_px: float = 0.2
     net_step_outside_px: tuple = (1.0, 3.0)
     net_step_inside_px: tuple = (0.5, 3.0)
     min_edge_support: float = 0.45
@@ -755,7 +810,12 @@ class DetectorParams(ParamsFile):
         "strip_inside_band": (0.0, 1.0), "strip_side_band": (0.0, 5.0), "strip_core_margin": (0.0, 0.49),
         "strip_level_fraction": (0.0, 10.0), "ground_level_fraction": (0.0, 10.0),
         "strip_end_rows": (1, 1000, "int"), "surface_min_contrast": (0.0, 255.0),
-        "surface_resume_fraction": (0.0, 1.0), "surface_resume_rows": (1, 1000, "int"), "strip_end_clearance_px": (0.0, 1000.0),
+        "surface_resume_fraction": (0.0, 1.0), "surface_resume_rows": (1, 1000, "int"),
+        "surface_side_margin": (0.0, 10.0), "surface_rect_columns": (8, 10000, "int"),
+        "surface_width_samples": (1.0, 10000.0), "marking_band_widths": (0.0, 100.0),
+        "transverse_columns": (8, 10000, "int"), "transverse_min_significance": (0.0, 100.0),
+        "transverse_chroma_min_step": (0.0, 255.0), "transverse_smooth_sigma_px": (0.05, 100.0, "open"),
+        "transverse_light_sigma_px": (0.05, 100.0, "open"), "strip_end_clearance_px": (0.0, 1000.0),
         "parallel_score_ratio": (0.0, 10.0), "parallel_min_width_ratio": (1.0, 100.0),
         "parallel_min_gap": (0.0, 100.0), "ground_between_margin": (0.0, 100.0),
         "strip_min_interior": (0.0, 10.0), "strip_max_outside_gap": (0.0, 100.0), "strip_max_spread": (0.0, 100.0),
@@ -768,7 +828,10 @@ class DetectorParams(ParamsFile):
         "chroma_min_change": (0.0, 255.0), "chroma_min_span": (0.0, 1.0), "chroma_samples": (3, 100000, "int"),
         "chroma_min_length_px": (1.0, 1000.0), "chroma_inside_margin_px": (0.0, 100.0),
         "chroma_outside_reach_px": (0.0, 100.0), "chroma_step_band_px": (0.0, 100.0),
-        "boundary_flank_ratio": (0.0, 10.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
+        "boundary_flank_ratio": (0.0, 10.0),
+        "boundary_same_step_ratio": (0.0, 10.0), "boundary_flank_bias_px": (-10.0, 10.0),
+        "boundary_stripe_shift_px": (0.0, 10.0), "boundary_stripe_resolved_px": (0.0, 100.0),
+        "boundary_stripe_shift_scale_px": (0.01, 100.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
         "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),

@@ -365,9 +365,9 @@ def transition_offsets(profiles: np.ndarray, offsets: np.ndarray, window: np.nda
 
 
 def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, window: np.ndarray,
-                     stripe_reach_px, flank_ratio: float = 0.3, centroid_halfwidth_px: float = 0.5,
-                     stripe_shift=(0.2, 1.6, 0.2), outer_flank: bool = True,
-                     flank_bias_px: float = 0.11) -> tuple[np.ndarray, np.ndarray]:
+                     stripe_reach_px, flank_ratio: float | None = None, centroid_halfwidth_px: float = 0.5,
+                     stripe_shift=None, outer_flank: bool = True, flank_bias_px: float | None = None,
+                     params: DetectorParams | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Sub-pixel position of a region's boundary in each profile, painted border stripe or not.
 
     Walking outwards (``outward`` = +1: along +offsets), a plain boundary is one step; a
@@ -398,18 +398,25 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
         Widest border stripe looked past, pixels (one per profile or for all).
     flank_ratio : float, optional
         An opposite step outwards of the strongest is the stripe's outer flank when it reaches
-        this fraction of the strongest step's slope.
+        this fraction of the strongest step's slope (``params.boundary_flank_ratio`` by default).
     centroid_halfwidth_px : float, optional
         Half width of the window of a flank's centroid, pixels.
     stripe_shift : tuple of 3 float, optional
         ``(amplitude_px, start_px, scale_px)`` of the correction for an unresolved stripe's outer
         flank: ``amplitude * exp(-(max(separation - start, 0) / scale) ** 1.5)`` pixels inwards,
-        ``separation`` the distance between the stripe's two flanks (calibration in the code).
+        ``separation`` the distance between the stripe's two flanks (calibration in the code);
+        by default ``params.boundary_stripe_shift_px``, ``boundary_stripe_resolved_px`` and
+        ``boundary_stripe_shift_scale_px``.
     outer_flank : bool, optional
         Place the boundary by extrapolating the outer flank of the chosen lobe (its 60 % and
         20 % crossings) instead of at the lobe's centroid.
     flank_bias_px : float, optional
-        Offset (pixels, outwards) of that extrapolation for an area-sampled step, removed.
+        Offset (pixels, outwards) of that extrapolation for an area-sampled step, removed
+        (``params.boundary_flank_bias_px`` by default).
+    params : DetectorParams, optional
+        The defaults above and ``boundary_same_step_ratio`` (a step of the chosen one's sign just
+        outside it is the region's sharper edge when it reaches this fraction of its slope);
+        ``DetectorParams()`` if omitted.
 
     Returns
     -------
@@ -418,6 +425,12 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
     strength : ndarray, shape (n,)
         The chosen flank's grey-level slope (grey levels per pixel).
     """
+    params = params or DetectorParams()
+    flank_ratio = params.boundary_flank_ratio if flank_ratio is None else flank_ratio
+    flank_bias_px = params.boundary_flank_bias_px if flank_bias_px is None else flank_bias_px
+    if stripe_shift is None:
+        stripe_shift = (params.boundary_stripe_shift_px, params.boundary_stripe_resolved_px,
+                        params.boundary_stripe_shift_scale_px)
     step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 1.0
     n, m = profiles.shape
     g = np.full(profiles.shape, np.nan, np.float32)
@@ -451,7 +464,7 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
     same = np.where(zone2, lobe_sign[:, None] * g0, -np.inf)
     local2 = np.zeros(zone2.shape, dtype=bool)
     local2[:, 1:-1] = (same[:, 1:-1] >= same[:, :-2]) & (same[:, 1:-1] >= same[:, 2:])
-    same = np.where(local2 & (same >= 0.6 * strength[:, None]), same, -np.inf)
+    same = np.where(local2 & (same >= params.boundary_same_step_ratio * strength[:, None]), same, -np.inf)
     outermost = np.where(np.isfinite(same), columns * out_dir, -np.inf).argmax(axis=1)
     has_same = np.isfinite(same[rows, outermost])
     chosen = np.where(has_same, outermost, chosen)
@@ -709,7 +722,7 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         window = np.abs(offsets)[None, :] <= halfwidth[:, None]
         if kind == "edge" and outward:
             position, strength = boundary_offsets(profiles, offsets, outward, window, stripe_reach,
-                                                  flank_ratio=params.boundary_flank_ratio)
+                                                  params=params)
             contrast = strength / RAMP_SLOPE_PER_STEP
         elif kind == "edge":
             position, strength = edge_offsets(profiles, offsets, polarity, window=window)

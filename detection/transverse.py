@@ -93,7 +93,7 @@ class TransverseLine:
 
 def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_right: float,
                    d_support: tuple, d_window: tuple, step_d_px: float = 0.5,
-                   marking_fraction: float = 1.2, max_rows: int = 800,
+                   marking_fraction: float | None = None, max_rows: int = 800,
                    params: DetectorParams | None = None) -> SurfaceExtent | None:
     """Depths ``(d_far, d_near)`` where the runway's surface ends, from rows of the frame
     resampled on lines through the vanishing point.
@@ -133,14 +133,16 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     step_d_px : float, optional
         Row spacing near the horizon, pixels of depth.
     marking_fraction : float, optional
-        Reach of a band of blended threshold markings along the runway, in runway widths.
+        Reach of a band of blended threshold markings along the runway, in runway widths
+        (``params.marking_band_widths`` by default).
     max_rows : int, optional
         Most rows resampled (rows spaced geometrically when the cap is reached).
     params : DetectorParams, optional
         The strip as the trapezoid model reads it: ``strip_inside_band`` (the surface between
         the edges), ``strip_side_band`` (the ground beside each), ``strip_core_margin`` (the
         reference rows) and ``strip_level_fraction`` (a row is the runway's); the
-        ``surface_*`` parameters.
+        ``surface_*`` parameters (the rows resampled: ``surface_side_margin``,
+        ``surface_rect_columns``, ``surface_width_samples``).
 
     Returns
     -------
@@ -148,11 +150,15 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
         None when the surface cannot be told from the ground at the reference depths.
     """
     params = params or DetectorParams()
+    if marking_fraction is None:
+        marking_fraction = params.marking_band_widths
     width = k_right - k_left
     # rows every half pixel near the horizon and at most max_rows of them (geometric beyond)
     n_rows = int(min(max_rows, max(8, (d_window[1] - d_window[0]) / step_d_px + 1)))
-    rect = rectify(image, horizon, s0, (k_left - 0.4 * width, k_right + 0.4 * width), d_window,
-                   max_rows=n_rows, max_columns=96, pixel_step=max(0.5, width * d_window[1] / 50.0),
+    side = params.surface_side_margin
+    rect = rectify(image, horizon, s0, (k_left - side * width, k_right + side * width), d_window,
+                   max_rows=n_rows, max_columns=params.surface_rect_columns,
+                   pixel_step=max(0.5, width * d_window[1] / params.surface_width_samples),
                    geometric_rows=n_rows == max_rows)
     if rect is None:
         return None
@@ -365,10 +371,11 @@ def transverse_grid(horizon: HorizonFrame, s0: float, k_centre: float, line_left
 
 def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                          d_expected: float, d_window: tuple, outward: int, min_step: float,
-                         n_columns: int = 48, step_d_px: float = 0.5,
-                         min_significance: float = 2.5, marking_fraction: float = 1.2,
-                         colour=None, min_chroma_step: float = 8.0,
-                         surface_level: float = math.nan) -> TransverseLine | None:
+                         n_columns: int | None = None, step_d_px: float = 0.5,
+                         min_significance: float | None = None, marking_fraction: float | None = None,
+                         colour=None, min_chroma_step: float | None = None,
+                         surface_level: float = math.nan,
+                         params: DetectorParams | None = None) -> TransverseLine | None:
     """Locate the threshold (``outward = +1``: outside is at larger depth) or the runway end
     (``outward = -1``) near depth ``d_expected`` within ``d_window = (d_min, d_max)``.
 
@@ -411,19 +418,26 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     min_step : float
         Smallest grey-level step (grey levels) that counts.
     n_columns : int, optional
-        Transverse samples between the edges, at 10 % to 90 % of the width.
+        Transverse samples between the edges, at 10 % to 90 % of the width
+        (``params.transverse_columns`` by default).
     step_d_px : float, optional
         Spacing of the transverse lines, pixels of depth.
     min_significance : float, optional
-        A step must stand out of the profile's noise by this factor.
+        A step must stand out of the profile's noise by this factor
+        (``params.transverse_min_significance`` by default).
     marking_fraction : float, optional
-        Reach of a band of threshold markings along the runway, in runway widths.
+        Reach of a band of threshold markings along the runway, in runway widths
+        (``params.marking_band_widths`` by default).
     colour : ndarray of uint8, shape (H, W, 3), optional
         The RGB frame, for the chroma profile.
     min_chroma_step : float, optional
-        Smallest chroma change (levels) for the chroma step to be used.
+        Smallest chroma change (levels) for the chroma step to be used
+        (``params.transverse_chroma_min_step`` by default).
     surface_level : float, optional
         The runway surface's own grey level (:func:`surface_extent`), NaN if unknown.
+    params : DetectorParams, optional
+        The defaults above and the profiles' smoothing (``transverse_smooth_sigma_px``,
+        ``transverse_light_sigma_px``); ``DetectorParams()`` if omitted.
 
     Returns
     -------
@@ -433,6 +447,12 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     ----------
     Gibert, PhD thesis (2016), Fig. 3.5 and Remark 5.3.1: the threshold corners P', P''.
     """
+    params = params or DetectorParams()
+    n_columns = params.transverse_columns if n_columns is None else n_columns
+    min_significance = params.transverse_min_significance if min_significance is None else min_significance
+    marking_fraction = params.marking_band_widths if marking_fraction is None else marking_fraction
+    min_chroma_step = params.transverse_chroma_min_step if min_chroma_step is None else min_chroma_step
+    smoothing = (params.transverse_smooth_sigma_px, params.transverse_light_sigma_px)
     d_min, d_max = (float(x) for x in d_window)
     if not (math.isfinite(d_min) and math.isfinite(d_max)) or d_max - d_min < 6 * step_d_px:
         return None
@@ -464,8 +484,8 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     # and each third of the width (:func:`_spans_width`) read them
     values = _transverse_values(image[v0:v1, u0:u1], maps, inside)
     level_profile, texture_profile = _profiles_of(values, rows_ok, texture=True)
-    grey = _step_profile(level_profile, depths, step_d_px, d_expected, outward)
-    texture = _step_profile(texture_profile, depths, step_d_px, d_expected, outward)
+    grey = _step_profile(level_profile, depths, step_d_px, d_expected, outward, *smoothing)
+    texture = _step_profile(texture_profile, depths, step_d_px, d_expected, outward, *smoothing)
     chosen = grey.pick(min_significance, 0.25 * min_step, inner, outer, outward) if grey else None
     best = (grey, chosen) if chosen is not None else None
     # the outermost departure from the ground that looks like the runway: in texture (the
@@ -501,7 +521,8 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
             break
     exit_depth = max(exits, key=lambda e: e[0] * outward) if exits else None
     if colour is not None:
-        chroma = _step_profile(profile_of(chroma_of(colour[v0:v1, u0:u1])), depths, step_d_px, d_expected, outward)
+        chroma = _step_profile(profile_of(chroma_of(colour[v0:v1, u0:u1])), depths, step_d_px, d_expected, outward,
+                               *smoothing)
         if chroma is not None:
             # the boundary lies at or beyond the grey step (which may be the stripes' inner edge)
             d_from = depths[chosen] if chosen is not None else d_expected
@@ -653,7 +674,7 @@ class _StepProfile:
     noise: float
     step_d_px: float
     d_expected: float
-    light: np.ndarray = None       # the profile smoothed over half a pixel only
+    light: np.ndarray = None       # the profile smoothed lightly (``transverse_light_sigma_px``)
     raw: np.ndarray = None         # the profile as sampled (gaps filled)
 
     def ground_departures(self, outward: int, inner: float, outer: float, min_level_change: float,
@@ -790,8 +811,9 @@ class _StepProfile:
         return float(np.sum(w * self.depths[idx]) / np.sum(w)) if w.sum() > 0 else float(self.depths[chosen])
 
 
-def _step_profile(profile, depths, step_d_px, d_expected, outward) -> _StepProfile | None:
-    """Smooth ``profile`` along depth (about one pixel), differentiate it (g > 0 where it rises
+def _step_profile(profile, depths, step_d_px, d_expected, outward, smooth_sigma_px: float,
+                  light_sigma_px: float) -> _StepProfile | None:
+    """Smooth ``profile`` along depth (a Gaussian of ``smooth_sigma_px``), differentiate it (g > 0 where it rises
     with depth) and measure the derivative's noise: the smaller of its spreads over the whole
     window and over the part outside the runway (markings inside, or field boundaries beyond
     the runway's end, are structure, not noise)."""
@@ -799,7 +821,7 @@ def _step_profile(profile, depths, step_d_px, d_expected, outward) -> _StepProfi
     if valid.sum() < 12:
         return None
     filled = np.interp(depths, depths[valid], profile[valid])
-    kernel = np.exp(-0.5 * (np.arange(-4, 5) * step_d_px / 0.8) ** 2)
+    kernel = np.exp(-0.5 * (np.arange(-4, 5) * step_d_px / smooth_sigma_px) ** 2)
     kernel /= kernel.sum()
     smooth = np.convolve(filled, kernel, mode="same")
     g = np.gradient(smooth, step_d_px)
@@ -813,7 +835,7 @@ def _step_profile(profile, depths, step_d_px, d_expected, outward) -> _StepProfi
 
     outside = valid & ((depths > d_expected + 2.0) if outward > 0 else (depths < d_expected - 2.0))
     noise = min(spread(magnitude[valid]), spread(magnitude[outside])) + 1e-3
-    light_kernel = np.exp(-0.5 * (np.arange(-2, 3) * step_d_px / 0.3) ** 2)
+    light_kernel = np.exp(-0.5 * (np.arange(-2, 3) * step_d_px / light_sigma_px) ** 2)
     light = np.convolve(np.pad(filled, 2, mode="edge"), light_kernel / light_kernel.sum(), mode="valid")
     light = np.where(valid, light, np.nan)
     return _StepProfile(depths, smooth, g, magnitude, noise, step_d_px, d_expected, light, filled)
