@@ -251,6 +251,12 @@ class DetectorParams(ParamsFile):
         a finite strip; a road runs on).
     score_dark_centre_weight : float
         A dark centre stripe counts this fraction of a bright one (painted lines are white).
+    score_width_exponent : float
+        A pair's score (quick and full) grows as its width to this power: among parallel paved
+        strips the runway is the widest, but a wide pair of unrelated lines must not win by width.
+    ground_rows_column_step : int
+        The ground's grey level row by row (the median across the pencil) is read on every
+        this-many-th column of the rectified image (its cost).
     centre_stripe_halfwidth, centre_stripe_sides : float, tuple of 2 float
         The centre stripe is read within this fraction of the width of the midline, against the
         mean between these fractions on either side.
@@ -630,6 +636,8 @@ class DetectorParams(ParamsFile):
     score_ends_base: float = 0.4
     score_ends_per_end: float = 0.3
     score_dark_centre_weight: float = 0.5
+    score_width_exponent: float = 0.5
+    ground_rows_column_step: int = 4
     centre_stripe_halfwidth: float = 0.015
     centre_stripe_sides: tuple = (0.04, 0.08)
     centre_stripe_min_step: float = 2.0
@@ -805,6 +813,7 @@ class DetectorParams(ParamsFile):
         "score_outside_floor": (0.0, 100.0), "score_centre_floor": (0.0, 100.0), "score_uniform_floor": (0.0, 1.0),
         "score_spread_scale": (0.01, 100.0),
         "score_ends_base": (0.0, 100.0), "score_ends_per_end": (0.0, 100.0), "score_dark_centre_weight": (0.0, 1.0),
+        "score_width_exponent": (0.0, 4.0), "ground_rows_column_step": (1, 64, "int"),
         "centre_stripe_halfwidth": (0.0, 0.5, "open"), "centre_stripe_sides": (0.0, 0.5),
         "centre_stripe_min_step": (0.0, 255.0), "centre_stripe_fraction": (0.0, 10.0),
         "strip_inside_band": (0.0, 1.0), "strip_side_band": (0.0, 5.0), "strip_core_margin": (0.0, 0.49),

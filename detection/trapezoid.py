@@ -302,12 +302,12 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
     quick_interior = np.nan_to_num(np.clip(expected * (inside - 0.5 * (out_l + out_r)) / contrast_min, 0.0, 1.0))
     quick_outside = np.nan_to_num(np.clip(1.0 - np.abs(out_l - out_r) / contrast_min, 0.0, 1.0))
     pre_score = (length_term * np.minimum(c_l, c_r) * (params.score_symmetry_floor + symmetry) * prior
-                 * quick_interior * (params.score_outside_floor + quick_outside) * np.sqrt(width))
+                 * quick_interior * (params.score_outside_floor + quick_outside) * width ** params.score_width_exponent)
     hypotheses = []
     # the ground's grey level row by row: the median over the whole width of the pencil (every
     # slope the search allows, a few hundred metres either side), where fields and grass are the
     # majority and a paved strip is a minority
-    ground_rows = row_quantile(rect.values[:, ::4], 0.5)
+    ground_rows = row_quantile(rect.values[:, ::params.ground_rows_column_step], 0.5)
     for p in np.argsort(-pre_score)[:params.pair_max_examined]:
         if pre_score[p] <= 0:
             continue
@@ -327,7 +327,7 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
         centre_term = inside["centre_rows"] * (1.0 if inside["centre_polarity"] > 0 else params.score_dark_centre_weight)
         # width: among parallel paved strips the runway is the widest (a taxiway is about half
         # as wide, a road a fifth), but a wide pair of unrelated lines must not win by width
-        width_term = float(width[p]) ** 0.5
+        width_term = float(width[p]) ** params.score_width_exponent
         # a runway is a finite strip: it ends (threshold, runway end) inside the image, where a
         # road or a field boundary runs on to the horizon and out of the frame
         ends = _strip_ends(rect, edges.k[li[p]], edges.k[ri[p]], far[p], near[p], bottom_depth_px, params)
