@@ -836,7 +836,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         d_pavement, pavement_step, moved = near.depth_px, near.step, None
         ground = ground_begins(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px,
                                min(d_exit, near.depth_px + params.pavement_search_fraction * depth_span
-                                   + params.pavement_search_px), surface_level, min_step)
+                                   + params.pavement_search_px), surface_level, min_step, params=params)
         if ground is not None and ground[0] > near.depth_px + params.pavement_min_move_px:
             d_ground, pavement_step = ground
             d_pavement = d_ground
@@ -850,7 +850,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
                 d_pavement, pavement_step = moved.depth_px, moved.step
         marking = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                     d_pavement, 1.0, min_step, surface_level=surface_level,
-                                    pavement_step=pavement_step)
+                                    pavement_step=pavement_step, params=params)
         if marking is not None and marking.line is None:
             notes.append(f"threshold withheld: plain pavement, then a marking {marking.pavement_widths:.1f} runway "
                          "widths in, too far to be placed (a displaced threshold?)")

@@ -95,6 +95,10 @@ NOT_SCALED_PX = (
     "ground_margin_px", "roi_min_side_px", "centre_image_margin_px", "threshold_window_min_px",
     "border_clearance_px", "threshold_exit_margin_px", "pavement_search_px", "pavement_min_move_px",
     "pavement_window_px", "pavement_agreement_px",
+    # where the ground begins and the threshold marking: depth pixels of resolution and sampling
+    # (threshold_marking), kept at their 2048 px values
+    "ground_begin_min_px", "marking_min_resolved_px", "marking_unresolved_min_span_px",
+    "marking_unresolved_plain_px",
 )
 
 
@@ -492,6 +496,35 @@ class DetectorParams(ParamsFile):
     pavement_window_px, pavement_agreement_px : float
         The step is then searched again within this depth of where the ground begins and must
         lie within the second of it.
+    ground_begin_min_px : float
+        Where the ground begins (:func:`threshold_marking.ground_begins`): the first this many
+        pixels of depth of consecutive ground rows ...
+    ground_begin_middle_span, ground_begin_middle_samples : tuple of 2 float, int
+        ... a row being ground when the median of this many samples between these fractions of
+        the width ...
+    ground_begin_side_band, ground_begin_side_samples : tuple of 2 float, int
+        ... differs from the runway's surface level as the median of this many samples between
+        these fractions of the width outside each edge does.
+    marking_min_pavement_widths, marking_max_pavement_widths : float
+        A threshold marking (:func:`threshold_marking.threshold_marking`) must begin between these
+        many runway widths inside the pavement.
+    marking_columns, marking_column_span : int, tuple of 2 float
+        It is read on transverse lines sampled at this many points between these fractions of the
+        width (clear of the side stripes and of the edges' blur).
+    marking_min_resolved_px : float
+        Depth pixels the first ``marking_min_pavement_widths`` of pavement must span for the
+        threshold's own stripes to be resolved; below it they are *unresolved* (seen blended)
+        and only a band's presence across the width is asked.
+    marking_unresolved_min_span_px : float
+        Unresolved: pixels a transverse line must cross the runway over to be read.
+    marking_start_fraction : float
+        Unresolved: the first lines' excess over the pavement's median line, as a fraction of the
+        markings' contrast, that shows the threshold's blended stripes at the pavement's start.
+    marking_unresolved_coverage : float
+        Unresolved: fraction of the width a band must cover to be the marking.
+    marking_unresolved_plain_px : float
+        Unresolved: depth pixels of plain pavement at its start before a brighter line makes the
+        threshold doubtful.
     confidence_residual_px : float
         The confidence's straightness term is ``exp(-(r / this)^2 / 2)``, r the larger edge RMS
         residual (pixels).
@@ -747,6 +780,20 @@ class DetectorParams(ParamsFile):
     pavement_min_move_px: float = 3.0
     pavement_window_px: float = 3.0
     pavement_agreement_px: float = 2.0
+    ground_begin_min_px: float = 1.5
+    ground_begin_middle_span: tuple = (0.15, 0.85)
+    ground_begin_middle_samples: int = 15
+    ground_begin_side_band: tuple = (0.15, 0.4)
+    ground_begin_side_samples: int = 6
+    marking_min_pavement_widths: float = 0.8
+    marking_max_pavement_widths: float = 12.0
+    marking_columns: int = 64
+    marking_column_span: tuple = (0.06, 0.94)
+    marking_min_resolved_px: float = 1.5
+    marking_unresolved_min_span_px: float = 6.0
+    marking_start_fraction: float = 0.25
+    marking_unresolved_coverage: float = 0.6
+    marking_unresolved_plain_px: float = 3.0
     confidence_residual_px: float = 0.8
     confidence_vp_sigmas: float = 3.0
     confidence_contrast_factor: float = 4.0
@@ -863,7 +910,14 @@ class DetectorParams(ParamsFile):
         "border_clearance_px": (0.0, 1000.0), "threshold_exit_margin_px": (0.0, 1000.0),
         "pavement_search_fraction": (0.0, 10.0), "pavement_search_px": (0.0, 10000.0),
         "pavement_min_move_px": (0.0, 1000.0), "pavement_window_px": (0.5, 1000.0),
-        "pavement_agreement_px": (0.0, 1000.0), "confidence_residual_px": (0.01, 100.0),
+        "pavement_agreement_px": (0.0, 1000.0),
+        "ground_begin_min_px": (0.0, 1000.0), "ground_begin_middle_span": (0.0, 1.0),
+        "ground_begin_middle_samples": (3, 1000, "int"), "ground_begin_side_band": (0.0, 10.0),
+        "ground_begin_side_samples": (1, 1000, "int"), "marking_min_pavement_widths": (0.0, 1000.0),
+        "marking_max_pavement_widths": (0.0, 1000.0), "marking_columns": (8, 10000, "int"),
+        "marking_column_span": (0.0, 1.0), "marking_min_resolved_px": (0.0, 1000.0),
+        "marking_unresolved_min_span_px": (0.0, 10000.0), "marking_start_fraction": (0.0, 10.0),
+        "marking_unresolved_coverage": (0.0, 1.0), "marking_unresolved_plain_px": (0.0, 1000.0), "confidence_residual_px": (0.01, 100.0),
         "confidence_vp_sigmas": (0.1, 100.0), "confidence_contrast_factor": (0.1, 1000.0),
         "confidence_without_centre": (0.0, 1.0),
         "horizon_margin_px": (0.0, 100000.0), "hold_s": (0.0, 60.0), "max_heading_deviation_deg": (1.0, 90.0), "max_edge_turn_rad": (0.0, 3.2),

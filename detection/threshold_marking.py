@@ -36,6 +36,7 @@ import cv2
 import numpy as np
 
 from visland.detection.horizon import HorizonFrame, meet_h
+from visland.detection.params import DetectorParams
 from visland.detection.refine import PixelLine
 from visland.detection.transverse import TransverseLine, edge_crossings_s, transverse_grid, transverse_line_h
 
@@ -70,11 +71,12 @@ class ThresholdMarking:
 
 def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                       d_pavement: float, d_far: float, min_step: float, surface_level: float = math.nan,
-                      pavement_step: float = 0.0, min_pavement_widths: float = 0.8, max_pavement_widths: float = 12.0,
-                      n_columns: int = 64, step_d_px: float = 0.5,
-                      min_resolved_px: float = 1.5, min_unresolved_span_px: float = 6.0,
-                      start_fraction: float = 0.25, unresolved_coverage: float = 0.6,
-                      unresolved_plain_px: float = 3.0) -> ThresholdMarking | None:
+                      pavement_step: float = 0.0, min_pavement_widths: float | None = None,
+                      max_pavement_widths: float | None = None, n_columns: int | None = None, step_d_px: float = 0.5,
+                      min_resolved_px: float | None = None, min_unresolved_span_px: float | None = None,
+                      start_fraction: float | None = None, unresolved_coverage: float | None = None,
+                      unresolved_plain_px: float | None = None,
+                      params: DetectorParams | None = None) -> ThresholdMarking | None:
     """The threshold marking when the pavement before it starts at ``d_pavement`` (module docstring).
 
     Parameters
@@ -98,13 +100,15 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         Grey-level step from the ground to the pavement where it begins: markings must be
         brighter than the pavement by at least as much.
     min_pavement_widths, max_pavement_widths : float
-        The marking must begin between these many runway widths inside the pavement.
+        The marking must begin between these many runway widths inside the pavement
+        (``params.marking_min_pavement_widths``, ``marking_max_pavement_widths`` by default).
     n_columns : int, optional
-        Samples along each transverse line between the edges.
+        Samples along each transverse line between the edges, over ``params.marking_column_span``
+        of the width (``params.marking_columns`` by default).
     step_d_px : float, optional
         Spacing of the transverse lines read, pixels of depth.
     min_resolved_px : float, optional
-        Depth pixels the first ``min_pavement_widths`` of pavement must span for the marking to
+        (``params.marking_min_resolved_px`` by default) Depth pixels the first ``min_pavement_widths`` of pavement must span for the marking to
         be looked for: below it the stripes a threshold at the pavement's start carries (6 m in,
         30 m long: about 0.83 of that span) cover less than the band test's two lines, their
         absence cannot be seen, and a marking further in (an aiming-point or touchdown-zone mark,
@@ -124,15 +128,20 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         at 2500 m the bar 7 widths in is placed (0.32 px; 10.2 px off at the pavement's start);
         at 3680 m it is a 0.3 px line dimmer than the pavement's step, withheld (was 9.1 px off).
     min_unresolved_span_px : float, optional
-        Unresolved: pixels a transverse line must cross the runway over to be read.
+        Unresolved: pixels a transverse line must cross the runway over to be read
+        (``params.marking_unresolved_min_span_px`` by default).
     start_fraction : float, optional
         Unresolved: the first lines' excess over the pavement's median line, as a fraction of the
-        markings' contrast, that shows the threshold's blended stripes at the pavement's start.
+        markings' contrast, that shows the threshold's blended stripes at the pavement's start
+        (``params.marking_start_fraction`` by default).
     unresolved_coverage : float, optional
-        Unresolved: fraction of the width a band must cover to be the marking.
+        Unresolved: fraction of the width a band must cover to be the marking
+        (``params.marking_unresolved_coverage`` by default).
     unresolved_plain_px : float, optional
         Unresolved: depth pixels of plain pavement at its start before a brighter line makes the
-        threshold doubtful.
+        threshold doubtful (``params.marking_unresolved_plain_px`` by default).
+    params : DetectorParams, optional
+        The defaults above and ``marking_column_span``; ``DetectorParams()`` if omitted.
 
     Returns
     -------
@@ -141,6 +150,18 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         without threshold markings: the pavement's start stands); ``line`` None when one does
         but cannot be placed (the caller withholds the threshold).
     """
+    params = params or DetectorParams()
+    if min_pavement_widths is None:
+        min_pavement_widths = params.marking_min_pavement_widths
+    if max_pavement_widths is None:
+        max_pavement_widths = params.marking_max_pavement_widths
+    n_columns = params.marking_columns if n_columns is None else n_columns
+    min_resolved_px = params.marking_min_resolved_px if min_resolved_px is None else min_resolved_px
+    if min_unresolved_span_px is None:
+        min_unresolved_span_px = params.marking_unresolved_min_span_px
+    start_fraction = params.marking_start_fraction if start_fraction is None else start_fraction
+    unresolved_coverage = params.marking_unresolved_coverage if unresolved_coverage is None else unresolved_coverage
+    unresolved_plain_px = params.marking_unresolved_plain_px if unresolved_plain_px is None else unresolved_plain_px
     line_left, line_right = left.homogeneous(), right.homogeneous()
     s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_pavement)
     width_k = float(s_right - s_left) / d_pavement
@@ -161,7 +182,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         return None
     depths = np.arange(d_hi, d_lo, -step_d_px)                      # from the pavement's start inwards
     # clear of the side stripes (a few per cent of the width) and of the edges' blur
-    fractions = np.linspace(0.06, 0.94, n_columns)
+    fractions = np.linspace(*params.marking_column_span, n_columns)
     ends_left, ends_right, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths,
                                                           fractions, image.shape)
     rows_ok = inside.all(axis=1)
@@ -258,12 +279,14 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
 
 def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine, d_from: float,
                   d_to: float, surface_level: float, min_step: float, step_d_px: float = 0.5,
-                  min_ground_px: float = 1.5) -> tuple[float, float] | None:
+                  min_ground_px: float | None = None,
+                  params: DetectorParams | None = None) -> tuple[float, float] | None:
     """Depth where the ground begins before a threshold found at ``d_from``, searching towards the
     camera up to ``d_to``.
 
     Row by row along transverse lines (through V2), the surface between the edges (median of the
-    middle 70 %) is compared with the ground beside each edge (15 to 40 % of the width outside):
+    middle 70 %, ``ground_begin_middle_span``) is compared with the ground beside each edge (15 to
+    40 % of the width outside, ``ground_begin_side_band``):
     a row is pavement while it differs from both sides the way the runway's own surface
     ``surface_level`` does (by half that difference at least; a taxiway joining one side makes
     that side paved, and the row counts as ground, so nothing moves). Returns the depth of the
@@ -293,20 +316,30 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     step_d_px : float, optional
         Spacing of the transverse lines read, pixels of depth.
     min_ground_px : float, optional
-        Depth (pixels) of consecutive ground rows that counts as the ground beginning.
+        Depth (pixels) of consecutive ground rows that counts as the ground beginning
+        (``params.ground_begin_min_px`` by default).
+    params : DetectorParams, optional
+        That default and the samples read (``ground_begin_middle_span``,
+        ``ground_begin_side_band``, ``ground_begin_middle_samples``, ``ground_begin_side_samples``);
+        ``DetectorParams()`` if omitted.
 
     Returns
     -------
     tuple of 2 float or None
         ``(depth_px, step)`` as above, or None.
     """
+    params = params or DetectorParams()
+    min_ground_px = params.ground_begin_min_px if min_ground_px is None else min_ground_px
     line_left, line_right = left.homogeneous(), right.homogeneous()
     s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_from)
     k_centre = (0.5 * (s_left + s_right) - s0) / d_from
     if not (math.isfinite(k_centre) and math.isfinite(surface_level) and d_to - d_from >= 3.0 * step_d_px):
         return None
     depths = np.arange(d_from + step_d_px, d_to, step_d_px)
-    parts = (np.linspace(0.15, 0.85, 15), np.linspace(-0.4, -0.15, 6), np.linspace(1.15, 1.4, 6))
+    side_in, side_out = params.ground_begin_side_band
+    n_side = params.ground_begin_side_samples
+    parts = (np.linspace(*params.ground_begin_middle_span, params.ground_begin_middle_samples),
+             np.linspace(-side_out, -side_in, n_side), np.linspace(1.0 + side_in, 1.0 + side_out, n_side))
     fractions = np.concatenate(parts)
     _, _, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths, fractions,
                                          image.shape)
