@@ -299,9 +299,9 @@ class DetectorParams(ParamsFile):
         stripes and the strip before them: 36 m on a 45 m runway): the runway's surface carries
         on across such a band of blended markings, and the threshold is searched that far beyond
         where the surface seems to end (:func:`transverse.find_transverse_line`).
-    transverse_columns : int
+    transverse_columns, transverse_column_span : int, tuple of 2 float
         The threshold and the runway's end are searched on transverse lines sampled at this many
-        points between the edges (10 % to 90 % of the width) ...
+        points between these fractions of the width ...
     transverse_min_significance : float
         ... where a step must stand out of the depth profile's noise by this factor ...
     transverse_chroma_min_step : float
@@ -525,6 +525,13 @@ class DetectorParams(ParamsFile):
     marking_unresolved_plain_px : float
         Unresolved: depth pixels of plain pavement at its start before a brighter line makes the
         threshold doubtful.
+    marking_bright_percentile : float
+        The markings' grey level is this percentile of the pavement's samples (white paint); a
+        sample is marked when brighter than the pavement by half their difference.
+    marking_quarter_min_share, marking_bar_coverage, marking_min_stripes : float, float, int
+        A line is a band of markings when each quarter of the width has at least the first
+        fraction marked, and then a bar when the second fraction of the width is marked, stripes
+        when at least this many separate marked runs cross it.
     confidence_residual_px : float
         The confidence's straightness term is ``exp(-(r / this)^2 / 2)``, r the larger edge RMS
         residual (pixels).
@@ -689,6 +696,7 @@ class DetectorParams(ParamsFile):
     surface_width_samples: float = 50.0
     marking_band_widths: float = 1.2
     transverse_columns: int = 48
+    transverse_column_span: tuple = (0.1, 0.9)
     transverse_min_significance: float = 2.5
     transverse_chroma_min_step: float = 8.0
     transverse_smooth_sigma_px: float = 0.8
@@ -794,6 +802,10 @@ class DetectorParams(ParamsFile):
     marking_start_fraction: float = 0.25
     marking_unresolved_coverage: float = 0.6
     marking_unresolved_plain_px: float = 3.0
+    marking_bright_percentile: float = 99.0
+    marking_quarter_min_share: float = 0.15
+    marking_bar_coverage: float = 0.8
+    marking_min_stripes: int = 3
     confidence_residual_px: float = 0.8
     confidence_vp_sigmas: float = 3.0
     confidence_contrast_factor: float = 4.0
@@ -869,7 +881,7 @@ class DetectorParams(ParamsFile):
         "surface_resume_fraction": (0.0, 1.0), "surface_resume_rows": (1, 1000, "int"),
         "surface_side_margin": (0.0, 10.0), "surface_rect_columns": (8, 10000, "int"),
         "surface_width_samples": (1.0, 10000.0), "marking_band_widths": (0.0, 100.0),
-        "transverse_columns": (8, 10000, "int"), "transverse_min_significance": (0.0, 100.0),
+        "transverse_columns": (8, 10000, "int"), "transverse_column_span": (0.0, 1.0), "transverse_min_significance": (0.0, 100.0),
         "transverse_chroma_min_step": (0.0, 255.0), "transverse_smooth_sigma_px": (0.05, 100.0, "open"),
         "transverse_light_sigma_px": (0.05, 100.0, "open"), "strip_end_clearance_px": (0.0, 1000.0),
         "parallel_score_ratio": (0.0, 10.0), "parallel_min_width_ratio": (1.0, 100.0),
@@ -917,7 +929,9 @@ class DetectorParams(ParamsFile):
         "marking_max_pavement_widths": (0.0, 1000.0), "marking_columns": (8, 10000, "int"),
         "marking_column_span": (0.0, 1.0), "marking_min_resolved_px": (0.0, 1000.0),
         "marking_unresolved_min_span_px": (0.0, 10000.0), "marking_start_fraction": (0.0, 10.0),
-        "marking_unresolved_coverage": (0.0, 1.0), "marking_unresolved_plain_px": (0.0, 1000.0), "confidence_residual_px": (0.01, 100.0),
+        "marking_unresolved_coverage": (0.0, 1.0), "marking_unresolved_plain_px": (0.0, 1000.0),
+        "marking_bright_percentile": (50.0, 100.0), "marking_quarter_min_share": (0.0, 1.0),
+        "marking_bar_coverage": (0.0, 1.0), "marking_min_stripes": (1, 1000, "int"), "confidence_residual_px": (0.01, 100.0),
         "confidence_vp_sigmas": (0.1, 100.0), "confidence_contrast_factor": (0.1, 1000.0),
         "confidence_without_centre": (0.0, 1.0),
         "horizon_margin_px": (0.0, 100000.0), "hold_s": (0.0, 60.0), "max_heading_deviation_deg": (1.0, 90.0), "max_edge_turn_rad": (0.0, 3.2),

@@ -141,7 +141,9 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         Unresolved: depth pixels of plain pavement at its start before a brighter line makes the
         threshold doubtful (``params.marking_unresolved_plain_px`` by default).
     params : DetectorParams, optional
-        The defaults above and ``marking_column_span``; ``DetectorParams()`` if omitted.
+        The defaults above, ``marking_column_span`` and the band test (``marking_bright_percentile``,
+        ``marking_quarter_min_share``, ``marking_bar_coverage``, ``marking_min_stripes``);
+        ``DetectorParams()`` if omitted.
 
     Returns
     -------
@@ -207,7 +209,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     # than the pavement differs from the ground (a brighter patch of surface, a seam, rubber
     # deposits, chevrons in yellow are not), which the haze dims in the same proportion
     sign = 1.0
-    bright = float(np.nanpercentile(ok, 99.0))
+    bright = float(np.nanpercentile(ok, params.marking_bright_percentile))
     contrast = bright - surface
     level = np.nanmean(np.where(inside, values, np.nan), axis=1)          # across the width, per line
     doubtful = None
@@ -237,9 +239,9 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     share = np.stack([marked[:, q].mean(axis=1) for q in quarters], axis=1)        # (rows, 4)
     coverage = marked.mean(axis=1)
     runs = (np.diff(marked.astype(np.int8), axis=1) == 1).sum(axis=1) + marked[:, 0]
-    spans_all = (share >= 0.15).all(axis=1) & rows_ok
-    is_bar = spans_all & (coverage >= 0.8)
-    is_stripes = spans_all & (runs >= 3)
+    spans_all = (share >= params.marking_quarter_min_share).all(axis=1) & rows_ok
+    is_bar = spans_all & (coverage >= params.marking_bar_coverage)
+    is_stripes = spans_all & (runs >= params.marking_min_stripes)
     band = is_bar | is_stripes
     if unresolved:
         # stripes are not told from a bar: a band across the width is the marking

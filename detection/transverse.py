@@ -419,7 +419,7 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
         Smallest grey-level step (grey levels) that counts.
     n_columns : int, optional
         Transverse samples between the edges, at 10 % to 90 % of the width
-        (``params.transverse_columns`` by default).
+        (``params.transverse_columns`` by default, over ``params.transverse_column_span``).
     step_d_px : float, optional
         Spacing of the transverse lines, pixels of depth.
     min_significance : float, optional
@@ -462,7 +462,7 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_ref)
     k_centre = (0.5 * (s_left + s_right) - s0) / d_ref
     depths = np.arange(d_min, d_max + 1e-9, step_d_px)
-    fractions = np.linspace(0.1, 0.9, n_columns)
+    fractions = np.linspace(*params.transverse_column_span, n_columns)
     ends_left, ends_right, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths,
                                                           fractions, image.shape)
     height, width = image.shape
