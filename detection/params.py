@@ -79,7 +79,8 @@ NOT_SCALED_PX = (
     "chroma_min_length_px", "chroma_inside_margin_px", "chroma_outside_reach_px", "chroma_step_band_px",
     "net_step_outside_px", "net_step_inside_px",
     # depth profiles' smoothing across a threshold or runway end, sub-pixel (transverse)
-    "transverse_smooth_sigma_px", "transverse_light_sigma_px",
+    "transverse_smooth_sigma_px", "transverse_light_sigma_px", "transverse_inner_px", "transverse_outer_px",
+    "faint_texture_max_width_px",
     # calibrated sub-pixel corrections of an area-sampled boundary (refine)
     "boundary_flank_bias_px", "boundary_stripe_shift_px", "boundary_stripe_resolved_px",
     "boundary_stripe_shift_scale_px",
@@ -307,6 +308,17 @@ class DetectorParams(ParamsFile):
     transverse_chroma_min_step : float
         ... and the chroma profile's step is used when the chroma changes across it by at least
         this many levels.
+    transverse_inner_px, transverse_inner_fraction : float
+        The boundary is searched from the larger of this many depth pixels and this fraction of
+        its expected depth inside where the surface ends ...
+    transverse_outer_px, transverse_outer_fraction : float
+        ... to the largest of this many pixels, this fraction of the depth and
+        ``marking_band_widths`` outside it.
+    faint_texture_max_width_px, faint_texture_min_change, faint_texture_k_sigma, faint_texture_min_significance : float
+        While the runway spans fewer than the first pixels across (stripes unresolved), a rise of
+        texture by the second fraction of the smallest step, above the ground's spread by the
+        third factor, standing out of the profile's noise by the fourth, is a band of distant
+        stripes.
     transverse_smooth_sigma_px, transverse_light_sigma_px : float
         Sigmas (pixels of depth) of the Gaussians smoothing those depth profiles before they are
         differentiated, and lightly for the fit of the boundary.
@@ -699,6 +711,14 @@ class DetectorParams(ParamsFile):
     transverse_column_span: tuple = (0.1, 0.9)
     transverse_min_significance: float = 2.5
     transverse_chroma_min_step: float = 8.0
+    transverse_inner_px: float = 1.5
+    transverse_inner_fraction: float = 0.01
+    transverse_outer_px: float = 2.5
+    transverse_outer_fraction: float = 0.02
+    faint_texture_max_width_px: float = 64.0
+    faint_texture_min_change: float = 0.1
+    faint_texture_k_sigma: float = 3.0
+    faint_texture_min_significance: float = 5.0
     transverse_smooth_sigma_px: float = 0.8
     transverse_light_sigma_px: float = 0.3
     strip_end_clearance_px: float = 3.0
@@ -882,7 +902,11 @@ class DetectorParams(ParamsFile):
         "surface_side_margin": (0.0, 10.0), "surface_rect_columns": (8, 10000, "int"),
         "surface_width_samples": (1.0, 10000.0), "marking_band_widths": (0.0, 100.0),
         "transverse_columns": (8, 10000, "int"), "transverse_column_span": (0.0, 1.0), "transverse_min_significance": (0.0, 100.0),
-        "transverse_chroma_min_step": (0.0, 255.0), "transverse_smooth_sigma_px": (0.05, 100.0, "open"),
+        "transverse_chroma_min_step": (0.0, 255.0), "transverse_inner_px": (0.0, 1000.0), "transverse_inner_fraction": (0.0, 1.0),
+        "transverse_outer_px": (0.0, 1000.0), "transverse_outer_fraction": (0.0, 1.0),
+        "faint_texture_max_width_px": (0.0, 100000.0), "faint_texture_min_change": (0.0, 10.0),
+        "faint_texture_k_sigma": (0.0, 100.0), "faint_texture_min_significance": (0.0, 100.0),
+        "transverse_smooth_sigma_px": (0.05, 100.0, "open"),
         "transverse_light_sigma_px": (0.05, 100.0, "open"), "strip_end_clearance_px": (0.0, 1000.0),
         "parallel_score_ratio": (0.0, 10.0), "parallel_min_width_ratio": (1.0, 100.0),
         "parallel_min_gap": (0.0, 100.0), "ground_between_margin": (0.0, 100.0),

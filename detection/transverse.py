@@ -436,8 +436,10 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     surface_level : float, optional
         The runway surface's own grey level (:func:`surface_extent`), NaN if unknown.
     params : DetectorParams, optional
-        The defaults above and the profiles' smoothing (``transverse_smooth_sigma_px``,
-        ``transverse_light_sigma_px``); ``DetectorParams()`` if omitted.
+        The defaults above, the profiles' smoothing (``transverse_smooth_sigma_px``,
+        ``transverse_light_sigma_px``), the reach searched inside and outside ``d_expected``
+        (``transverse_inner_*``, ``transverse_outer_*``) and the faint texture of distant stripes
+        (``faint_texture_*``); ``DetectorParams()`` if omitted.
 
     Returns
     -------
@@ -476,9 +478,10 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     u1 = int(min(width, math.ceil(u[inside].max()) + 2))
     v1 = int(min(height, math.ceil(v[inside].max()) + 2))
     maps = ((u - u0).astype(np.float32), (v - v0).astype(np.float32))
-    inner = max(1.5, 0.01 * d_expected)
+    inner = max(params.transverse_inner_px, params.transverse_inner_fraction * d_expected)
     width_s = abs(s_right - s_left) * d_expected / d_ref       # runway width along the horizon at d_expected
-    outer = max(2.5, 0.02 * d_expected, marking_fraction * width_s * d_expected / horizon.camera.fx + 1.0)
+    outer = max(params.transverse_outer_px, params.transverse_outer_fraction * d_expected,
+                marking_fraction * width_s * d_expected / horizon.camera.fx + 1.0)
     profile_of = functools.partial(_depth_profile, maps=maps, inside=inside, rows_ok=rows_ok)
     # the grey levels on the transverse lines, resampled once: the level and texture profiles
     # and each third of the width (:func:`_spans_width`) read them
@@ -513,10 +516,11 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     # (only while the stripes, 1/25 to 1/12 of the width each, are too narrow to be resolved:
     # resolved stripes give a strong texture departure, and a faint one is the ground's)
     runway_px = float(np.nanmedian(np.linalg.norm(ends_right - ends_left, axis=1)))
-    if texture is not None and not texture_departures and runway_px < 64.0:
+    if texture is not None and not texture_departures and runway_px < params.faint_texture_max_width_px:
         for depth_t, step_t, significance_t, _ in texture.ground_departures(
-                outward, inner, outer, min_level_change=0.1 * min_step, k_sigma=3.0, rising_only=True, lag_px=1.0):
-            if significance_t >= 5.0:
+                outward, inner, outer, min_level_change=params.faint_texture_min_change * min_step,
+                k_sigma=params.faint_texture_k_sigma, rising_only=True, lag_px=1.0):
+            if significance_t >= params.faint_texture_min_significance:
                 exits.append((depth_t, step_t, significance_t, "faint-texture"))
             break
     exit_depth = max(exits, key=lambda e: e[0] * outward) if exits else None
