@@ -352,10 +352,10 @@ def _clip(polygon, p, q, sign: float):
     return out
 
 
-def _area(polygon) -> float:
-    x = np.array([v[0] for v in polygon])
-    y = np.array([v[1] for v in polygon])
-    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+def _signed_area(ring) -> float:
+    """Shoelace area of a polygon (list of (x, y)): positive when counter-clockwise in (x, y)."""
+    ring = list(ring)
+    return 0.5 * sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(ring, ring[1:] + ring[:1]))
 
 
 def _split_cell(polygon, strip: ObliqueStrip) -> tuple[list, list]:
@@ -374,8 +374,8 @@ def _split_cell(polygon, strip: ObliqueStrip) -> tuple[list, list]:
     between = _clip(polygon, pa, qa, signs[0])
     outside.append(_clip(between, pb, qb, -signs[1]))
     inside = _clip(between, pb, qb, signs[1])
-    keep = [piece for piece in outside if len(piece) >= 3 and _area(piece) > 1e-6]
-    return ([inside] if len(inside) >= 3 and _area(inside) > 1e-6 else []), keep
+    keep = [piece for piece in outside if len(piece) >= 3 and abs(_signed_area(piece)) > 1e-6]
+    return ([inside] if len(inside) >= 3 and abs(_signed_area(inside)) > 1e-6 else []), keep
 
 
 def _polygons_mesh(polygons, uv_of):
@@ -399,10 +399,6 @@ def _polygons_mesh(polygons, uv_of):
                            process=False)
 
 
-def _signed_area(ring) -> float:
-    return 0.5 * sum(a[0] * b[1] - b[0] * a[1] for a, b in zip(ring, ring[1:] + ring[:1]))
-
-
 def _ground_and_oblique(ground_cells, layout: AirportLayout):
     """The ground cells untouched by the oblique strips, the ground pieces they leave, and the
     strips' own pieces by strip: ``(cells, ground_polygons, {strip index: polygons})``."""
@@ -418,8 +414,9 @@ def _ground_and_oblique(ground_cells, layout: AirportLayout):
         pieces = [[(a, c_), (b, c_), (b, d), (a, d)] for a, b, c_, d in ground_cells[hit]]
         keep &= ~hit
         # pieces other strips left behind may lie in this strip's band too
-        pieces += [g for g in ground_polygons if _bbox_overlaps(g, x0, x1, y0, y1)]
-        ground_polygons = [g for g in ground_polygons if not _bbox_overlaps(g, x0, x1, y0, y1)]
+        overlapping = [_bbox_overlaps(g, x0, x1, y0, y1) for g in ground_polygons]
+        pieces += [g for g, hit_g in zip(ground_polygons, overlapping) if hit_g]
+        ground_polygons = [g for g, hit_g in zip(ground_polygons, overlapping) if not hit_g]
         for piece in pieces:
             inside, outside = _split_cell(piece, strip)
             strip_polygons.setdefault(k, []).extend(inside)

@@ -89,8 +89,6 @@ def test_a_rendered_frame_with_a_parallel_taxiway_at_600_m_is_not_paired_with_it
     import os
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from visland.camera import CameraModel
-    from visland.detection import detect_runway
-    from visland.detection.accuracy import frame_errors
     from visland.features import batch_R_camera_from_runway, ideal_features
     from visland.flight import simulate_flight
     from visland.render import FrameRenderer, SceneParams
@@ -106,8 +104,7 @@ def test_a_rendered_frame_with_a_parallel_taxiway_at_600_m_is_not_paired_with_it
     scene = SceneParams(surroundings="sand", monochrome=True)
     with FrameRenderer(scene, camera, scenario.runway) as renderer:
         rgb = renderer.render(state.p_runway_m[0], R[0], frame_seed=0)
-    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
-    errors = frame_errors(result, camera, labels.corners_uv[0], labels.corners_visible[0], float(state.dpsi_rad[0]))
+    result, errors = _detected_with_errors(rgb, camera, state, labels)
     assert result.found, result.reason
     assert errors["edge_px"] < 1.0, errors
     assert not errors["gross"], errors
@@ -211,6 +208,16 @@ def test_aiming_point_marks_far_out_are_not_taken_for_the_threshold_marking():
     assert worst and max(worst) < 2.0, worst
 
 
+def _detected_with_errors(rgb, camera, state, labels):
+    """``detect_runway`` on one frame (acquisition, the state's inertial roll and pitch) and its
+    errors against the exact labels (:func:`visland.detection.accuracy.frame_errors`)."""
+    from visland.detection import detect_runway
+    from visland.detection.accuracy import frame_errors
+    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    return result, frame_errors(result, camera, labels.corners_uv[0], labels.corners_visible[0],
+                                float(state.dpsi_rad[0]))
+
+
 def _study_frame(scene_overrides: dict, runway_m: tuple, distance_m: float, size: int):
     """The robustness study's frame (benchmarks/detection_robustness.py): thesis-3 flown with the
     given runway, the 25 Hz frame nearest ``distance_m`` before the threshold rendered by visland's
@@ -249,12 +256,8 @@ def test_a_runway_beside_a_more_contrasted_parallel_taxiway_is_found_in_the_chro
     runway was not a convincing strip in grey levels and the taxiway was taken (edges 65 px
     off). In the chroma the runway is a strip of low chroma, wider than the taxiway beside it:
     it must be found, both edges within 1 px of the exact labels, no corner more than 5 px off."""
-    from visland.detection import detect_runway
-    from visland.detection.accuracy import frame_errors
-
     rgb, camera, state, labels = _study_frame(scene, (3000.0, 45.0), distance, 1024)
-    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
-    errors = frame_errors(result, camera, labels.corners_uv[0], labels.corners_visible[0], float(state.dpsi_rad[0]))
+    result, errors = _detected_with_errors(rgb, camera, state, labels)
     assert result.found, result.reason
     assert errors["edge_px"] < 1.0, errors
     assert not errors["gross"], errors
@@ -271,13 +274,9 @@ def test_a_displaced_threshold_too_far_to_resolve_its_stripes_is_placed_or_withh
     corners within 1 px of the exact labels). At 3680 m it is a 0.3 px line dimmer than the
     pavement's own step: the threshold cannot be placed and must be withheld, not put at the
     pavement's start."""
-    from visland.detection import detect_runway
-    from visland.detection.accuracy import frame_errors
-
     scene = {"markings": "displaced", "pre_threshold_m": 300.0}
     rgb, camera, state, labels = _study_frame(scene, (3000.0, 45.0), distance, 1024)
-    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
-    errors = frame_errors(result, camera, labels.corners_uv[0], labels.corners_visible[0], float(state.dpsi_rad[0]))
+    result, errors = _detected_with_errors(rgb, camera, state, labels)
     assert result.found, result.reason
     assert not errors["gross"], errors
     if placed:
