@@ -117,9 +117,10 @@ def _measure_ideal(source) -> Measurements:
     return Measurements("ideal", rows.columns())
 
 
-def _measure_detection(source, params, quiet, windows=None) -> Measurements:
+def _measure_detection(source, params, quiet, windows=None, publish=None) -> Measurements:
     """``windows``: None (the detector's own search windows) or a
-    :class:`visland.datasets.filter_windows.FilterWindows` that places them (its time counts as analysis)."""
+    :class:`visland.datasets.filter_windows.FilterWindows` that places them (its time counts as analysis);
+    ``publish``: None or a :class:`_SharedDetections` that receives every frame's result."""
     from visland.detection import DetectionSequence
     sequence = DetectionSequence(source.camera, params)
     rows = _Rows("detection")
@@ -138,6 +139,8 @@ def _measure_detection(source, params, quiet, windows=None) -> Measurements:
                 result = sequence(image, float(source.inertial.roll_rad[index]),
                                   float(source.inertial.pitch_rad[index]), t, predicted=predicted)
                 analysis += time.perf_counter() - tic
+                if publish is not None:
+                    publish.put(index, result)
                 rows.add(index, t, result.to_measurement_row(), result.found, result.reason, result.confidence)
             if windows is not None:
                 windows.add(rows.rows[-1])
@@ -145,14 +148,17 @@ def _measure_detection(source, params, quiet, windows=None) -> Measurements:
     return Measurements("detection", rows.columns(), flagged, analysis, time.perf_counter() - start)
 
 
-def _measure_tracking(source, kind, init, quiet) -> Measurements:
+def _measure_tracking(source, kind, init, quiet, detections=None) -> Measurements:
+    """``detections``: None, or with anchored tracking a :class:`_SharedDetections` filled by the
+    detection source measuring the same frames (the anchor reads them instead of detecting again)."""
     from visland.tracking import TrackerParams, track_source
     base, policy = parse_source(kind)
     params = TrackerParams(update_policy=policy) if policy else None
     start = time.perf_counter()
     with progress_bar(len(source), "track", enabled=not quiet) as bar:
         result = track_source(source, anchor=base == "anchored", init=init, params=params,
-                              progress=lambda done, total: bar.update(done - bar.n))
+                              progress=lambda done, total: bar.update(done - bar.n),
+                              anchor_detections=detections.get if detections is not None else None)
     return Measurements(kind, result.columns, result.flagged, result.analysis_s, time.perf_counter() - start)
 
 
@@ -191,6 +197,38 @@ def measure(source, kind: str = "detection", detector_params=None, init=None, qu
     return _measure_tracking(source, kind, init, quiet)
 
 
+class _SharedDetections:
+    """Each frame's :class:`visland.detection.DetectionResult` from the detection source's thread,
+    for the anchored tracker's thread of the same :func:`measure_many` (both run the same
+    :class:`visland.detection.DetectionSequence` on the same frames: the anchor reads the
+    detection source's results instead of computing them again)."""
+
+    def __init__(self):
+        self._results: dict = {}
+        self._error: BaseException | None = None
+        self._changed = threading.Condition()
+
+    def put(self, index: int, result) -> None:
+        with self._changed:
+            self._results[index] = result
+            self._changed.notify_all()
+
+    def fail(self, error: BaseException) -> None:
+        """The detection thread stopped: every later :meth:`get` raises."""
+        with self._changed:
+            self._error = error
+            self._changed.notify_all()
+
+    def get(self, index: int):
+        """Frame ``index``'s result, waiting for the detection thread (each is read once)."""
+        with self._changed:
+            while index not in self._results:
+                if self._error is not None:
+                    raise RuntimeError(f"frame {index}: the detection source stopped ({self._error})")
+                self._changed.wait()
+            return self._results.pop(index)
+
+
 class _TeeSource:
     """One consumer's view of a source whose frames another thread decodes once for all."""
 
@@ -210,6 +248,17 @@ class _TeeSource:
                 return
             index, colour, reason, grey = item
             yield (index, grey if grey is not None else as_grey(colour), reason) if gray else (index, colour, reason)
+
+
+class _Broadcast:
+    """Hands each result to several :class:`_SharedDetections`."""
+
+    def __init__(self, targets):
+        self._targets = list(targets)
+
+    def put(self, index: int, result) -> None:
+        for target in self._targets:
+            target.put(index, result)
 
 
 def measure_many(source, kinds, init=None, quiet: bool = False, windows=None) -> dict:
@@ -242,12 +291,27 @@ def measure_many(source, kinds, init=None, quiet: bool = False, windows=None) ->
     results: dict = {}
     errors: dict = {}
 
+    # detection and anchored tracking run the same detector on the same frames: detect once
+    # (not with windows placed by a filter: those differ from the anchor's own)
+    anchored = [k for k in imaging if parse_source(k)[0] == "anchored"]
+    shared = ({k: _SharedDetections() for k in anchored}
+              if "detection" in imaging and windows is None and source.inertial is not None else {})
+
     def consume(kind):
         try:
-            results[kind] = measure(_TeeSource(source, queues[kind]), kind, init=init,
-                                    quiet=quiet or kind != imaging[0], windows=windows)
+            tee = _TeeSource(source, queues[kind])
+            if kind == "detection" and shared:
+                results[kind] = _measure_detection(tee, None, quiet or kind != imaging[0],
+                                                   publish=_Broadcast(shared.values()))
+            elif kind in shared:
+                results[kind] = _measure_tracking(tee, kind, init, quiet or kind != imaging[0], shared[kind])
+            else:
+                results[kind] = measure(tee, kind, init=init, quiet=quiet or kind != imaging[0], windows=windows)
         except BaseException as error:          # re-raised in the caller after the decoder stops
             errors[kind] = error
+            if kind == "detection":
+                for detections in shared.values():
+                    detections.fail(error)
             while queues[kind].get() is not None:   # keep draining so the decoder never blocks
                 pass
 

@@ -120,7 +120,7 @@ def labels_anchor_provider(labels, every_n: int = 1):
     return provider
 
 
-def detector_anchor_provider(camera, inertial, params=None, track_previous: bool = True):
+def detector_anchor_provider(camera, inertial, params=None, track_previous: bool = True, detections=None):
     """Anchors from :func:`visland.detection.detect_runway` (imported here: a heavy stage).
 
     Parameters
@@ -129,6 +129,10 @@ def detector_anchor_provider(camera, inertial, params=None, track_previous: bool
     inertial : :class:`visland.sensors.InertialSeries` (roll and pitch at each frame).
     params : ``visland.detection.DetectorParams`` or None for the defaults.
     track_previous : pass the previous frame's detection to the detector as its prior.
+    detections : optional callable ``(frame_index) -> DetectionResult``: the results of a
+        :class:`visland.detection.DetectionSequence` with these ``params`` already run on the same
+        frames (with ``track_previous``, called on every frame in order), used instead of detecting
+        again.
 
     Raises ValueError if the detection stage is not available.
     """
@@ -145,6 +149,8 @@ def detector_anchor_provider(camera, inertial, params=None, track_previous: bool
     def provider(frame_index: int, image) -> AnchorObservation:
         if image is None:
             return AnchorObservation.nothing("no image")
+        if detections is not None:
+            return anchor_from_detection(detections(frame_index))
         roll, pitch = float(inertial.roll_rad[frame_index]), float(inertial.pitch_rad[frame_index])
         if sequence is not None:
             result = sequence(image, roll, pitch, float(inertial.t_s[frame_index]))

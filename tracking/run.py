@@ -92,7 +92,7 @@ def _frames(source, gray: bool = True):
             yield index, image, reason
 
 
-def _anchor_provider(source, anchor, anchor_every, start):
+def _anchor_provider(source, anchor, anchor_every, start, detections=None):
     if anchor is None:
         return None
     if anchor == "labels":
@@ -102,7 +102,7 @@ def _anchor_provider(source, anchor, anchor_every, start):
     if anchor == "detector":
         if source.inertial is None:
             raise ValueError("--anchor detector needs telemetry (the detector uses the inertial roll and pitch)")
-        detect = detector_anchor_provider(source.camera, source.inertial)
+        detect = detector_anchor_provider(source.camera, source.inertial, detections=detections)
 
         def provider(index, image):
             if (index - start) % anchor_every:
@@ -118,7 +118,7 @@ def _name(source) -> str:
 
 def track_source(source, init: str | None = "labels", params: TrackerParams | None = None, anchor=None,
                  anchor_every: int = 1, start: int = 0, edge_points: int = 0, use_inertial: bool = True,
-                 progress=None) -> TrackRun:
+                 progress=None, anchor_detections=None) -> TrackRun:
     """Track the designated points through the frames of ``source``.
 
     Parameters
@@ -138,6 +138,10 @@ def track_source(source, init: str | None = "labels", params: TrackerParams | No
     edge_points : with ``init="labels"``, points added on each side edge.
     use_inertial : use the telemetry attitude (prediction, template warp, rigid check).
     progress : optional callable ``progress(frames_done, n_frames)``.
+    anchor_detections : optional callable ``(frame_index) -> DetectionResult`` with ``anchor="detector"``:
+        the detections of a :class:`visland.detection.DetectionSequence` run on the same frames
+        (every frame, from ``start``), used instead of running the detector again (a campaign
+        measuring detection and anchored tracking detects each frame once).
     """
     params = params or TrackerParams()
     anchor = {True: "detector", False: None}.get(anchor, anchor) if isinstance(anchor, bool) else anchor
@@ -157,7 +161,7 @@ def track_source(source, init: str | None = "labels", params: TrackerParams | No
         if edge_points:
             raise ValueError("--edge-points needs --init labels (it places points between labelled corners)")
         designation = parse_designation(init)
-    provider = _anchor_provider(source, anchor, anchor_every, start)
+    provider = _anchor_provider(source, anchor, anchor_every, start, anchor_detections)
     if provider is not None and not any(name in CORNER_NAMES for name, _ in designation):
         raise ValueError("anchoring re-anchors runway corners: designate at least one corner by name "
                          f"({', '.join(CORNER_NAMES)})")
@@ -178,6 +182,10 @@ def track_source(source, init: str | None = "labels", params: TrackerParams | No
             if image is None:
                 raise ValueError(f"cannot designate on {reason}")
             steps[index] = tracker.start(image, designation, _attitude(inertial, index), frame_index=index)
+            if provider is not None:
+                # the designation frame is the detector's first frame too (its sequence then holds
+                # the prior the detection source's holds: both see the same frames)
+                provider(index, frame)
         elif image is None:
             steps[index] = tracker.skip(reason, frame_index=index)
             flagged.append((index, reason))

@@ -367,3 +367,35 @@ def test_dask_tasks_share_their_hosts_cores_among_the_workers_task_slots():
     cpus = {"tcp://a:1": 2, "tcp://a:2": 2, "tcp://b:1": 4, "tcp://c:1": 8, "tcp://c:2": 8, "tcp://d:1": None}
     assert opencv_threads_per_worker(workers, cpus) == {"tcp://a:1": 1, "tcp://a:2": 1, "tcp://b:1": 4,
                                                         "tcp://c:1": 2, "tcp://c:2": 2, "tcp://d:1": 1}
+
+
+@pytest.mark.slow
+def test_anchored_tracking_reads_the_detection_sources_results_exactly(generated):
+    """measure_many with detection and anchored tracking detects each frame once (the anchor reads
+    the detection source's results); its anchored rows equal those of anchored tracking measured
+    alone, which runs its own detector on the same frames."""
+    from visland.datasets.measure import measure, measure_many
+    from visland.datasets.sources import open_source
+    together = measure_many(open_source(generated), ["detection", "anchored"], quiet=True)
+    alone = measure(open_source(generated), "anchored", quiet=True)
+    assert together["anchored"].columns.keys() == alone.columns.keys()
+    for column, values in alone.columns.items():
+        assert np.array_equal(np.asarray(together["anchored"].columns[column]), np.asarray(values),
+                              equal_nan=np.asarray(values).dtype.kind == "f"), column
+    assert list(together["anchored"].columns["source"]).count("anchored") > 50
+
+
+def test_shared_detections_hand_over_in_any_order_and_report_a_stopped_detector():
+    import threading
+    from visland.datasets.measure import _SharedDetections
+    shared = _SharedDetections()
+    got = []
+    reader = threading.Thread(target=lambda: got.extend(shared.get(i) for i in range(3)))
+    reader.start()
+    for i in range(3):
+        shared.put(i, f"result {i}")
+    reader.join(timeout=5)
+    assert got == ["result 0", "result 1", "result 2"]
+    shared.fail(ValueError("broken frame"))
+    with pytest.raises(RuntimeError, match="frame 3: the detection source stopped"):
+        shared.get(3)
