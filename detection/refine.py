@@ -23,7 +23,8 @@ import numpy as np
 from visland.detection.params import DetectorParams
 
 __all__ = ["PixelLine", "LineFit", "NoFit", "SLOPE_PER_STEP", "median_of", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
-           "stripe_offsets", "fit_line", "refine_line", "chroma_boundary", "chroma_of"]
+           "stripe_offsets", "fit_line", "refine_line", "chroma_boundary", "chroma_of",
+           "remap_inside"]
 
 _DERIVATIVE = np.array([-1.0, -2.0, 0.0, 2.0, 1.0]) / 8.0
 #: Peak slope of the 5-tap derivative across a step blurred by about a pixel, per unit of step
@@ -182,6 +183,47 @@ def chroma_of(rgb: np.ndarray) -> np.ndarray:
     """
     r, g, b = cv2.split(np.ascontiguousarray(rgb))
     return cv2.subtract(cv2.max(cv2.max(r, g), b), cv2.min(cv2.min(r, g), b))
+
+
+def remap_inside(image, map_u, map_v, inside, border_mode: int = cv2.BORDER_CONSTANT,
+                 border_value: float = 0.0) -> np.ndarray:
+    """``cv2.remap(image as float32, map_u, map_v)`` (bilinear) at the samples ``inside``, read
+    from a float32 crop of the frame around them instead of the whole frame converted.
+
+    The crop holds every pixel a sample inside interpolates from (a pixel of margin each side,
+    more where the frame ends), and the maps move by the crop's whole-pixel origin, an exact
+    float32 subtraction that keeps ``cv2.remap``'s fixed-point sub-pixel position: the values
+    inside are the whole frame's to the bit. Samples outside read ``border_value`` (constant
+    border) or a pixel of the crop's edge (replicated border): the caller sets them.
+
+    Parameters
+    ----------
+    image : ndarray, shape (H, W)
+        Grey frame (uint8 or float32).
+    map_u, map_v : ndarray of float32
+        Sample positions, pixels of the frame (SPEC convention, as ``cv2.remap``).
+    inside : ndarray of bool, same shape
+        The samples that must be exact (finite positions within the frame).
+    border_mode : int, optional
+        ``cv2.remap``'s border mode for taps outside the crop.
+    border_value : float, optional
+        Its value with ``cv2.BORDER_CONSTANT``.
+
+    Returns
+    -------
+    ndarray of float32, shape of ``map_u``
+    """
+    if not inside.any():
+        return np.full(map_u.shape, np.float32(border_value), np.float32)
+    height, width = image.shape[:2]
+    u0 = max(0, int(math.floor(float(map_u.min(where=inside, initial=np.inf)))) - 1)
+    v0 = max(0, int(math.floor(float(map_v.min(where=inside, initial=np.inf)))) - 1)
+    u1 = min(width, int(math.ceil(float(map_u.max(where=inside, initial=-np.inf)))) + 2)
+    v1 = min(height, int(math.ceil(float(map_v.max(where=inside, initial=-np.inf)))) + 2)
+    crop = np.asarray(image[v0:v1, u0:u1], dtype=np.float32)
+    crop_u = np.where(inside, map_u - np.float32(u0), np.float32(-1.0))
+    crop_v = np.where(inside, map_v - np.float32(v0), np.float32(-1.0))
+    return cv2.remap(crop, crop_u, crop_v, cv2.INTER_LINEAR, borderMode=border_mode, borderValue=border_value)
 
 
 def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: float,

@@ -37,7 +37,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame, meet_h
 from visland.detection.params import DetectorParams
-from visland.detection.refine import PixelLine
+from visland.detection.refine import PixelLine, remap_inside
 from visland.detection.transverse import TransverseLine, edge_crossings_s, transverse_grid, transverse_line_h
 
 __all__ = ["ThresholdMarking", "threshold_marking", "ground_begins", "STRIPES_FROM_THRESHOLD_WIDTHS"]
@@ -197,8 +197,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     if rows_ok.sum() < 8:
         return None
     maps = (np.where(inside, grid[..., 0], -1).astype(np.float32), np.where(inside, grid[..., 1], -1).astype(np.float32))
-    values = cv2.remap(np.ascontiguousarray(image, dtype=np.float32), maps[0], maps[1], cv2.INTER_LINEAR,
-                       borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
+    values = remap_inside(image, maps[0], maps[1], inside, cv2.BORDER_CONSTANT, np.nan)
     values = np.where(inside & rows_ok[:, None], values, np.nan)
     ok = values[rows_ok]
     if math.isfinite(surface_level):
@@ -348,8 +347,9 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     rows_ok = inside.all(axis=1)
     if rows_ok.sum() < 3:
         return None
-    maps = (np.where(inside, grid[..., 0], 0).astype(np.float32), np.where(inside, grid[..., 1], 0).astype(np.float32))
-    values = cv2.remap(np.ascontiguousarray(image, dtype=np.float32), maps[0], maps[1], cv2.INTER_LINEAR)
+    # (the rows with a sample outside the frame are not used: rows_ok)
+    maps = (grid[..., 0].astype(np.float32), grid[..., 1].astype(np.float32))
+    values = remap_inside(image, maps[0], maps[1], inside)
     n0, n1 = len(parts[0]), len(parts[0]) + len(parts[1])
     middle = np.median(values[:, :n0], axis=1)
     beside = (np.median(values[:, n0:n1], axis=1), np.median(values[:, n1:], axis=1))
