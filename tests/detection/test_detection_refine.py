@@ -105,3 +105,25 @@ def test_no_edge_gives_no_fit_with_the_reason():
     # a span too short to sample says so
     short = refine_line(flat, start_line(), (0, 1), "edge", halfwidth_px=6)
     assert not short and "too short" in short.reason
+
+
+@pytest.mark.parametrize("border", ["constant", "replicate"])
+def test_remap_inside_reads_the_whole_frames_values(border):
+    """Resampling a crop around the samples gives, at every sample inside the frame, the very
+    float32 value ``cv2.remap`` reads off the whole frame converted to float32 (sub-pixel
+    positions, samples on the frame's last row and column, a sample outside left to the caller)."""
+    import cv2
+
+    from visland.detection.refine import remap_inside
+    rng = np.random.default_rng(3)
+    image = rng.integers(0, 256, (60, 80), dtype=np.uint8)
+    map_u = np.concatenate([rng.uniform(20.0, 45.0, 200), [79.0, 0.0, 33.5, -4.0]]).astype(np.float32)
+    map_v = np.concatenate([rng.uniform(10.0, 30.0, 200), [12.25, 59.0, 59.0, 5.0]]).astype(np.float32)
+    map_u, map_v = map_u.reshape(6, 34), map_v.reshape(6, 34)
+    inside = (map_u >= 0) & (map_u <= 79) & (map_v >= 0) & (map_v <= 59)
+    mode = cv2.BORDER_CONSTANT if border == "constant" else cv2.BORDER_REPLICATE
+    whole = cv2.remap(image.astype(np.float32), map_u, map_v, cv2.INTER_LINEAR, borderMode=mode, borderValue=np.nan)
+    cropped = remap_inside(image, map_u, map_v, inside, mode, np.nan)
+    assert not inside.all() and inside.sum() == 6 * 34 - 1
+    np.testing.assert_array_equal(cropped[inside], whole[inside])      # NaN (constant border) included
+    assert cropped.dtype == np.float32 and cropped.shape == map_u.shape
