@@ -29,6 +29,7 @@ import os
 import queue
 import threading
 import time
+from multiprocessing.shared_memory import SharedMemory
 from pathlib import Path
 
 import numpy as np
@@ -155,6 +156,81 @@ def _render_task(task):
     return index, rgb
 
 
+#: shared-memory blocks this worker process has attached, by name (a pool's workers end with it)
+_ATTACHED: dict = {}
+
+
+def _render_task_shared(task, block: str, shape: tuple):
+    """Render one frame in a pool worker into the shared-memory block ``block`` (``shape`` uint8):
+    ``(index, None)``; a frame of another shape or type comes back whole, ``(index, rgb)``, for the
+    parent to report it."""
+    index, rgb = _render_task(task)
+    if rgb.shape != tuple(shape) or rgb.dtype != np.uint8:
+        return index, rgb
+    memory = _ATTACHED.get(block)
+    if memory is None:
+        # attached, never unlinked here: the parent made the block and unlinks it (the spawned
+        # workers share the parent's resource tracker, so this registration is the parent's own)
+        memory = _ATTACHED[block] = SharedMemory(name=block)
+    np.copyto(np.ndarray(shape, np.uint8, buffer=memory.buf), rgb)
+    return index, None
+
+
+def _shared_memory_room(nbytes: int) -> bool:
+    """Whether ``/dev/shm`` has ``nbytes`` free (a block written past the room of its tmpfs kills
+    the writer with SIGBUS: below that, frames come back through the pipe)."""
+    try:
+        stat = os.statvfs("/dev/shm")
+    except (OSError, AttributeError):
+        return False
+    return stat.f_bavail * stat.f_frsize >= 2 * nbytes
+
+
+class _SharedFrames:
+    """A ring of shared-memory blocks, one frame each, that pool workers render into.
+
+    ``take()`` gives a free block's name, ``read(name)`` copies the frame out of it (a fresh
+    array the consumer owns: the block is free again at once), ``close()`` releases and unlinks
+    every block (also after an error or an interrupted consumer: nothing stays in ``/dev/shm``).
+    """
+
+    def __init__(self, count: int, shape: tuple):
+        self.shape = tuple(shape)
+        nbytes = int(np.prod(self.shape))
+        self.blocks: dict = {}
+        try:
+            for _ in range(count):
+                memory = SharedMemory(create=True, size=nbytes)
+                self.blocks[memory.name] = memory
+        except BaseException:
+            self.close()
+            raise
+        self._free = list(self.blocks)
+
+    def take(self) -> str:
+        return self._free.pop()
+
+    def read(self, name: str):
+        view = np.ndarray(self.shape, np.uint8, buffer=self.blocks[name].buf)
+        rgb = view.copy()
+        del view                              # no export left: the block can be closed
+        self._free.append(name)
+        return rgb
+
+    def __len__(self):
+        return len(self._free)
+
+    def close(self) -> None:
+        for memory in self.blocks.values():
+            memory.close()
+            try:
+                memory.unlink()
+            except FileNotFoundError:
+                pass
+        self.blocks = {}
+        self._free = []
+
+
 class RenderedSource(FrameSource):
     """The frames of a generate job rendered on demand, with the metadata of its folder.
 
@@ -212,13 +288,7 @@ class RenderedSource(FrameSource):
         """``(index, rgb)`` in order, rendered ahead in a thread or a process pool."""
         tasks = self._tasks()
         if self._workers > 1:
-            import multiprocessing
-            context = multiprocessing.get_context("spawn")          # one fresh GL context per process
-            with context.Pool(min(self._workers, len(tasks))) as pool:
-                try:
-                    yield from pool.imap(_render_task, tasks, chunksize=1)
-                finally:
-                    pool.terminate()
+            yield from self._rendered_in_processes(tasks)
             return
         frames: queue.Queue = queue.Queue(maxsize=self._prefetch)
         stop = threading.Event()
@@ -262,6 +332,53 @@ class RenderedSource(FrameSource):
                 except queue.Empty:
                     pass
             thread.join()
+
+    def _rendered_in_processes(self, tasks):
+        """``(index, rgb)`` in order, rendered ahead by a pool of spawned processes.
+
+        Each frame comes back through a block of shared memory (:class:`_SharedFrames`): the
+        worker copies it in, this process copies it out, and only the block's name goes through
+        the pool's pipe. Pickling 12.6 MB frames through the pipe instead cost a pickle, two
+        kernel copies and an unpickle per frame, and kept both sides busy in the pipe. At most
+        ``workers + prefetch`` frames are rendered ahead (one block each).
+        """
+        import multiprocessing
+        from collections import deque
+        import cv2  # noqa: F401 -- imported before the spawn: a spawned child takes sys.path as it is
+        #             then, and OpenCV's loader puts its own folder there while another thread imports it
+        shape = (self.camera.height, self.camera.width, 3)
+        workers = min(self._workers, len(tasks))
+        ring = None
+        if _shared_memory_room(int(np.prod(shape)) * (workers + self._prefetch)):
+            ring = _SharedFrames(min(len(tasks), workers + self._prefetch), shape)
+        context = multiprocessing.get_context("spawn")              # one fresh GL context per process
+        try:
+            with context.Pool(workers) as pool:
+                try:
+                    if ring is None:
+                        yield from pool.imap(_render_task, tasks, chunksize=1)
+                        return
+                    pending: deque = deque()                        # (block, AsyncResult) in frame order
+                    todo = iter(tasks)
+                    for task in todo:
+                        block = ring.take()
+                        pending.append((block, pool.apply_async(_render_task_shared, (task, block, shape))))
+                        if not len(ring):
+                            break
+                    while pending:
+                        block, result = pending.popleft()
+                        index, rgb = result.get()
+                        rgb = ring.read(block) if rgb is None else rgb
+                        task = next(todo, None)
+                        if task is not None:
+                            block = ring.take()
+                            pending.append((block, pool.apply_async(_render_task_shared, (task, block, shape))))
+                        yield index, rgb
+                finally:
+                    pool.terminate()
+        finally:
+            if ring is not None:
+                ring.close()
 
     def frames(self, gray: bool = True, prefetch: int = 4):
         """Yield ``(index, image, None)`` in order: RGB (H, W, 3) uint8, or grey levels when ``gray``."""

@@ -91,3 +91,70 @@ def test_a_writer_error_reaches_the_caller(tmp_path):
     with pytest.raises(TypeError):
         writer.close()
     assert (tmp_path / "ok" / "000000.png").is_file()
+
+
+def _rendered_source(folder, workers):
+    """A :class:`RenderedSource` of a tiny approach (128 px, 1 Hz: a few frames)."""
+    from visland.datasets.stream import RenderedSource, write_dataset_files
+    from visland.simulate import run_simulation
+    job = short_job(128, 1.0)
+    result = run_simulation(job.scenario, job.options)
+    write_dataset_files(result, folder)
+    return RenderedSource(folder, job, result, workers=workers, prefetch=2)
+
+
+@pytest.fixture
+def shared_blocks(monkeypatch):
+    """The names of every shared-memory block the streaming pool makes (recorded as made)."""
+    from visland.datasets import stream
+    names = []
+
+    class Recorded(stream.SharedMemory):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            if kwargs.get("create"):
+                names.append(self.name)
+    monkeypatch.setattr(stream, "SharedMemory", Recorded)
+    return names
+
+
+def _left_in_dev_shm(names):
+    import os
+    return [name for name in names if os.path.exists(os.path.join("/dev/shm", name.lstrip("/")))]
+
+
+@pytest.mark.slow
+def test_frames_through_shared_memory_are_the_rendered_pixels_and_leave_nothing_behind(tmp_path, shared_blocks):
+    """Independent truth: the same frames rendered in a thread of this process (no hand-off)."""
+    in_thread = list(_rendered_source(tmp_path / "a", workers=1)._rendered())
+    in_pool = list(_rendered_source(tmp_path / "b", workers=2)._rendered())
+    assert len(shared_blocks) == 4                          # workers + prefetch: frames did go through them
+    assert [i for i, _ in in_pool] == [i for i, _ in in_thread] == list(range(len(in_thread)))
+    assert len(in_thread) > len(shared_blocks)              # every block was used more than once
+    for (_, a), (_, b) in zip(in_thread, in_pool):
+        assert a.shape == (128, 128, 3) and a.std() > 1.0  # a rendered frame, not a blank
+        np.testing.assert_array_equal(a, b)
+    assert not _left_in_dev_shm(shared_blocks)
+
+
+@pytest.mark.slow
+def test_an_interrupted_consumer_leaves_no_shared_memory_behind(tmp_path, shared_blocks):
+    frames = _rendered_source(tmp_path, workers=2)._rendered()
+    index, rgb = next(frames)
+    assert index == 0 and rgb.shape == (128, 128, 3)
+    assert len(shared_blocks) == 4 and len(_left_in_dev_shm(shared_blocks)) == 4
+    frames.close()                                          # the consumer stops early (an error, Ctrl-C)
+    assert not _left_in_dev_shm(shared_blocks)
+
+
+@pytest.mark.slow
+def test_a_failing_render_reaches_the_consumer_and_leaves_no_shared_memory_behind(tmp_path, shared_blocks,
+                                                                                  monkeypatch):
+    real_payload = gen._payload
+
+    def broken(job, result):            # the workers cannot build the runway: every render fails there
+        return {**real_payload(job, result), "runway": {"not_a_runway_field": 1.0}}
+    monkeypatch.setattr(gen, "_payload", broken)
+    with pytest.raises(TypeError, match="not_a_runway_field"):
+        list(_rendered_source(tmp_path, workers=2)._rendered())
+    assert len(shared_blocks) == 4 and not _left_in_dev_shm(shared_blocks)
