@@ -396,8 +396,10 @@ def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
 
 
 def _wider_strip_in_chroma(hypotheses, chroma, ctx: _Context, lines, bottom_depth: float):
-    """The grey-level ranking, with the best strip of the chroma ahead of it when that strip is
-    a wider paved strip beside the grey levels' best (:func:`~visland.detection.trapezoid.wider_strip_beside`).
+    """The grey-level ranking, with the best strip of the chroma put just ahead of the first
+    convincing grey strip it is a wider paved strip beside
+    (:func:`~visland.detection.trapezoid.wider_strip_beside`): the grey levels' best, or one
+    ranked after hypotheses that are no paved strip along it (a bright building).
 
     Pavement is grey: a runway whose grey level is the ground's (concrete on dry grass) is still
     a strip of low chroma, when a darker taxiway beside it is the only strip in grey levels. Of
@@ -413,11 +415,18 @@ def _wider_strip_in_chroma(hypotheses, chroma, ctx: _Context, lines, bottom_dept
     if not in_chroma:
         return hypotheses
     top = in_chroma[0]
-    if not (is_convincing_strip(top, params) and is_convincing_strip(best, params)
-            and wider_strip_beside(best, top, params)):
+    if not is_convincing_strip(top, params):
+        return hypotheses
+    # the first convincing grey strip it is wider beside: the grey levels' best, or one ranked
+    # after a strip that is no paved strip along it (a bright building beside the parallel
+    # taxiway outscored both at 2500 m; the taxiway was then measured in the runway's place)
+    narrower = next((i for i, h in enumerate(hypotheses)
+                     if is_convincing_strip(h, params) and wider_strip_beside(h, top, params)), None)
+    if narrower is None:
         return hypotheses
     top = replace(top, centre_polarity=0, evidence={**top.evidence, "channel": "chroma"})
-    return [top] + [h for h in hypotheses if not wider_strip_beside(h, top, params)]
+    return (hypotheses[:narrower] + [top]
+            + [h for h in hypotheses[narrower:] if not wider_strip_beside(h, top, params)])
 
 
 def _pencil_pixel_line(horizon: HorizonFrame, s0: float, k: float, d_ref: float) -> PixelLine:

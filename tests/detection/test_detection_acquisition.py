@@ -264,6 +264,24 @@ def test_a_runway_beside_a_more_contrasted_parallel_taxiway_is_found_in_the_chro
 
 
 @pytest.mark.slow
+def test_a_bright_building_ranked_first_does_not_hand_the_runway_to_the_taxiway():
+    """Concrete on dry grass, 512 px, 2500 m before the threshold (thesis-3, visland's renderer):
+    in grey levels the best strip is a bright building right of the runway, then the darker
+    parallel taxiway; the runway (the grass's grey level) is a strip of low chroma only, not
+    wider than the building by the parallel ratio. The chroma strip was compared with the grey
+    levels' best alone, so the building failed its measurement and the taxiway was reported
+    (found, edges 31.6 px off). The runway is wider than the taxiway beside it and must be
+    measured in its place: found, both edges within 1 px of the exact labels, no corner more
+    than 5 px off."""
+    rgb, camera, state, labels = _study_frame({"surface": "concrete", "surroundings": "dry"}, (3000.0, 45.0),
+                                              2500.0, 512)
+    result, errors = _detected_with_errors(rgb, camera, state, labels)
+    assert result.found, result.reason
+    assert errors["edge_px"] < 1.0, errors
+    assert not errors["gross"], errors
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("distance, placed", [(2500.0, True), (3680.0, False)])
 def test_a_displaced_threshold_too_far_to_resolve_its_stripes_is_placed_or_withheld(distance, placed):
     """The robustness study's displaced threshold (300 m of pavement before it, a white bar across
