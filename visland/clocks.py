@@ -17,14 +17,22 @@ deg correlated over seconds, a straight-line trend in time removing a third of t
 on thesis-6). A slow bias left in the comparison is confused with a shift of the telemetry
 wherever the roll rate keeps one sign for a while; fitting the drift took the eight H.264
 thesis approaches' offset errors from an RMS of 18 ms (worst 27 ms) to 12 ms (worst 28 ms, 7 of
-8 within 20 ms). A faster drift (a quadratic in time) is not modelled: it takes the roll
+8 within 20 ms), and the cut at three robust sigmas (below) to 6 ms (worst 11 ms, all eight). A faster drift (a quadratic in time) is not modelled: it takes the roll
 manoeuvres' own signal (thesis-8: 47 ms off).
 
 The comparison is robust: a frame's horizon is sometimes another line (a cloud bank, the
 terrain's far edge; seen on visland's own 512 px approaches, episodes of seconds 3 to 13 deg
 off, while the rest agree within 0.05-0.15 deg), so each frame's difference, centred on the
-drift fitted to the frames that follow, costs its square up to :data:`INLIER_DEG` and no more
-(a truncated quadratic), and ``S`` minimises the sum. Its uncertainty is the larger of the least-squares one over the
+drift fitted to the frames that follow, costs its square up to a limit and no more (a truncated
+quadratic), and ``S`` minimises the sum. The limit is first :data:`INLIER_DEG`, then
+:data:`K_SIGMA` robust sigmas of the differences that follow (1.4826 times their median absolute
+deviation, at least :data:`MIN_LIMIT_DEG`), and ``S`` is searched again within
+:data:`REFINE_S` of the previous one, :data:`PASSES` times at most: a horizon that goes wrong
+slowly (before it jumps to a cloud bank it is often 0.3-0.6 deg off for seconds, 5-8 of its own
+sigmas) stays inside a fixed 0.5 deg limit and pulls ``S`` wherever the roll rate is high
+(thesis-1 at 512 px: the first 3 s, 0.3-0.6 deg off while the roll rate is 4-12 deg/s, took
+the offset 28 ms early). A cut at three sigmas is the usual one for Gaussian noise (0.3 % of
+the frames that do follow are cut). Its uncertainty is the larger of the least-squares one over the
 inlier frames, ``sigma_residual / sqrt(sum(roll_rate^2))`` widened for residuals correlated
 from frame to frame, and a block jackknife (the estimate repeated without each
 :data:`BLOCK_S`-second stretch of frames), which also sees errors that follow the flight.
@@ -52,6 +60,15 @@ MAX_SIGMA_S = 0.1
 #: A frame whose roll differs from the telemetry's (less the fitted constant and drift) by more
 #: than this is not following it: its cost stops growing there (deg).
 INLIER_DEG = 0.5
+#: After the first search, the cut is this many robust sigmas of the differences that follow...
+K_SIGMA = 3.0
+#: ...but never below this (deg): a horizon measured better than this is not expected, and the
+#: cut must not close on noise-free series.
+MIN_LIMIT_DEG = 0.02
+#: Searches with a cut from the previous one's residuals, each within this of the previous
+#: offset (s); they stop when the cut no longer changes (within 1 %).
+PASSES = 3
+REFINE_S = 0.2
 #: Length of the stretches of frames left out in turn by the jackknife (s).
 BLOCK_S = 2.0
 
@@ -72,7 +89,7 @@ class TimeOffset:
     residual_deg : float
         RMS roll difference between the inlier frames and the shifted telemetry, degrees.
     inliers : int
-        Frames whose roll follows the shifted telemetry's within :data:`INLIER_DEG`.
+        Frames whose roll follows the shifted telemetry's within the final cut (module docstring).
     """
 
     offset_s: float
@@ -155,12 +172,21 @@ def offset_from_rolls(name: str, times, rolls, t_tel, roll_tel, max_offset_s: fl
         As :func:`estimate_time_offset`.
     """
     offsets = np.arange(-max_offset_s, max_offset_s + STEP_S / 2, STEP_S)
-    offset = _best_offset(times, rolls, t_tel, roll_tel, offsets)
+    limit = math.radians(INLIER_DEG)
+    offset = _best_offset(times, rolls, t_tel, roll_tel, offsets, limit)
     if offset is None:
         raise ValueError(f"{name}: the telemetry does not cover the frames at any offset within "
                          f"+-{max_offset_s:g} s")
-    difference = _without_drift(times, rolls - np.interp(times - offset, t_tel, roll_tel))
-    inliers = np.abs(difference) < math.radians(INLIER_DEG)
+    for _ in range(PASSES):
+        cut = _sigma_cut(_without_drift(times, rolls - np.interp(times - offset, t_tel, roll_tel), limit), limit)
+        if abs(cut - limit) <= 0.01 * limit:
+            break
+        limit = cut
+        near = offset + np.arange(-REFINE_S, REFINE_S + STEP_S / 2, STEP_S)
+        found = _best_offset(times, rolls, t_tel, roll_tel, near[np.abs(near) <= max_offset_s], limit)
+        offset = offset if found is None else found
+    difference = _without_drift(times, rolls - np.interp(times - offset, t_tel, roll_tel), limit)
+    inliers = np.abs(difference) < limit
     rate = np.interp(times - offset, t_tel, np.gradient(roll_tel, t_tel))[inliers]
     # what the drift's two terms cannot absorb of the sensitivity to the offset
     basis = _drift_basis(times[inliers])
@@ -175,10 +201,10 @@ def offset_from_rolls(name: str, times, rolls, t_tel, roll_tel, max_offset_s: fl
     sigma *= math.sqrt((1.0 + rho) / (1.0 - rho))
     moving = float(np.sqrt(np.mean(rate ** 2))) if rate.size else 0.0
     if int(inliers.sum()) >= 10 and sigma <= MAX_SIGMA_S:
-        sigma = max(sigma, _jackknife_sigma(times, rolls, t_tel, roll_tel, offset))
+        sigma = max(sigma, _jackknife_sigma(times, rolls, t_tel, roll_tel, offset, limit))
     if not sigma <= MAX_SIGMA_S or int(inliers.sum()) < 10:
         spread = (f"one sigma {sigma:.2f} s, {int(inliers.sum())} of {len(times)} horizons following the telemetry's "
-                  f"roll within {INLIER_DEG:g} deg" if moving > math.radians(0.05) else "no roll motion at all")
+                  f"roll within {math.degrees(limit):.2g} deg" if moving > math.radians(0.05) else "no roll motion at all")
         raise ValueError(f"{name}: the clock offset cannot be fixed ({spread}): too little roll motion "
                          "(straight and level flight says nothing) or a horizon the frames do not show clearly; "
                          "give --time-offset")
@@ -186,18 +212,19 @@ def offset_from_rolls(name: str, times, rolls, t_tel, roll_tel, max_offset_s: fl
                       inliers=int(inliers.sum()))
 
 
-def _best_offset(times, rolls, t_tel, roll_tel, offsets) -> float | None:
-    """The offset among ``offsets`` minimising the truncated quadratic cost (module docstring),
-    refined by a parabola through its neighbours; None when the telemetry never covers 80 % of
-    the frames."""
-    c2 = math.radians(INLIER_DEG) ** 2
+def _best_offset(times, rolls, t_tel, roll_tel, offsets, limit: float) -> float | None:
+    """The offset among ``offsets`` minimising the quadratic cost truncated at ``limit`` (rad;
+    module docstring), refined by a parabola through its neighbours; None when the telemetry
+    never covers 80 % of the frames."""
+    c2 = limit ** 2
     costs = np.full(len(offsets), np.inf)
     for k, offset in enumerate(offsets):
         # telemetry on the frames' clock: stamped tau, it happened at tau + offset
         inside = (times >= t_tel[0] + offset) & (times <= t_tel[-1] + offset)
         if inside.sum() < 0.8 * len(times):
             continue
-        difference = _without_drift(times[inside], rolls[inside] - np.interp(times[inside] - offset, t_tel, roll_tel))
+        difference = _without_drift(times[inside], rolls[inside] - np.interp(times[inside] - offset, t_tel, roll_tel),
+                                    limit)
         # frames outside the telemetry cost as much as an outlier, so that coverage does not pay
         costs[k] = float(np.sum(np.minimum(difference ** 2, c2)) + c2 * (len(times) - inside.sum()))
     if not np.isfinite(costs).any():
@@ -219,13 +246,12 @@ def _drift_basis(times) -> np.ndarray:
     return np.column_stack([np.ones_like(times), u])
 
 
-def _without_drift(times, difference) -> np.ndarray:
+def _without_drift(times, difference, limit: float) -> np.ndarray:
     """``difference`` (rad, frames' roll minus the shifted telemetry's) less its constant and
     linear drift, fitted to the frames that follow it: centred on the median first, then three
-    least-squares fits to the frames within :data:`INLIER_DEG` of the previous fit."""
+    least-squares fits to the frames within ``limit`` (rad) of the previous fit."""
     residual = difference - np.median(difference)
     basis = _drift_basis(times)
-    limit = math.radians(INLIER_DEG)
     for _ in range(3):
         follow = np.abs(residual) < limit
         if int(follow.sum()) < 3:
@@ -235,9 +261,19 @@ def _without_drift(times, difference) -> np.ndarray:
     return residual
 
 
-def _jackknife_sigma(times, rolls, t_tel, roll_tel, offset: float) -> float:
+def _sigma_cut(residual, limit: float) -> float:
+    """The next cut (rad): :data:`K_SIGMA` robust sigmas (1.4826 median absolute deviations) of
+    the residuals within ``limit``, at least :data:`MIN_LIMIT_DEG` and at most ``limit``."""
+    follow = residual[np.abs(residual) < limit]
+    if follow.size < 10:
+        return limit
+    sigma = 1.4826 * float(np.median(np.abs(follow - np.median(follow))))
+    return float(np.clip(K_SIGMA * sigma, math.radians(MIN_LIMIT_DEG), limit))
+
+
+def _jackknife_sigma(times, rolls, t_tel, roll_tel, offset: float, limit: float) -> float:
     """Block jackknife standard error of the offset: re-estimated without each :data:`BLOCK_S`
-    stretch of frames (searched within 0.2 s of ``offset``)."""
+    stretch of frames (searched within 0.2 s of ``offset``, the cost truncated at ``limit``)."""
     blocks = np.floor((times - times[0]) / BLOCK_S).astype(int)
     labels = np.unique(blocks)
     if len(labels) < 3:
@@ -246,7 +282,7 @@ def _jackknife_sigma(times, rolls, t_tel, roll_tel, offset: float) -> float:
     estimates = []
     for label in labels:
         keep = blocks != label
-        found = _best_offset(times[keep], rolls[keep], t_tel, roll_tel, near)
+        found = _best_offset(times[keep], rolls[keep], t_tel, roll_tel, near, limit)
         if found is not None:
             estimates.append(found)
     n = len(estimates)
