@@ -28,7 +28,7 @@ from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import median_of
 
-__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_mean", "finite_median",
+__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_quantiles", "row_mean", "finite_median",
            "as_slice"]
 
 
@@ -342,13 +342,34 @@ def row_quantile(values: np.ndarray, q: float) -> np.ndarray:
     -------
     ndarray, shape (n,)
     """
+    return row_quantiles(values, (q,))[0]
+
+
+def row_quantiles(values: np.ndarray, qs) -> list:
+    """:func:`row_quantile` for several quantiles of the same rows, sorted once.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n, m)
+        Rows of values, NaN for missing.
+    qs : sequence of float
+        Quantiles, 0..1 (nearest order statistics).
+
+    Returns
+    -------
+    list of ndarray, shape (n,)
+        One per quantile, in the order of ``qs``.
+    """
     if values.ndim != 2 or values.shape[1] == 0:
-        return np.full(len(values), np.nan)
+        return [np.full(len(values), np.nan) for _ in qs]
     ordered = np.sort(values, axis=1)                      # NaN sort last
     count = np.isfinite(ordered).sum(axis=1)
-    index = np.clip(np.floor(q * (count - 1) + 0.5).astype(int), 0, values.shape[1] - 1)
-    out = ordered[np.arange(len(ordered)), index]
-    return np.where(count > 0, out, np.nan)
+    rows = np.arange(len(ordered))
+    out = []
+    for q in qs:
+        index = np.clip(np.floor(q * (count - 1) + 0.5).astype(int), 0, values.shape[1] - 1)
+        out.append(np.where(count > 0, ordered[rows, index], np.nan))
+    return out
 
 
 def row_mean(values: np.ndarray) -> np.ndarray:

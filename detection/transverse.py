@@ -31,7 +31,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame, meet_h
 from visland.detection.params import DetectorParams
-from visland.detection.pencil import as_slice, finite_median, rectify, row_mean, row_quantile
+from visland.detection.pencil import as_slice, finite_median, rectify, row_mean, row_quantile, row_quantiles
 from visland.detection.refine import MAD_TO_SIGMA, PixelLine, chroma_of, median_of
 
 __all__ = ["TransverseLine", "SurfaceExtent", "find_transverse_line", "surface_extent", "edge_crossings_s",
@@ -171,8 +171,7 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
         # the ground beside each edge separately: a taxiway joining one side makes that side
         # paved for a while, the other side still tells the runway from its surroundings
         out_levels = [row_quantile(rect.values[:, side], 0.5) for side in beside]
-        low = row_quantile(rect.values[:, inside], 0.25)
-        high = row_quantile(rect.values[:, inside], 0.75)
+        low, high, median = row_quantiles(rect.values[:, inside], (0.25, 0.75, 0.5))
     core_margin = params.strip_core_margin
     core = (rect.d >= d_support[0] + core_margin * (d_support[1] - d_support[0])) & \
         (rect.d <= d_support[1] - core_margin * (d_support[1] - d_support[0]))
@@ -257,7 +256,6 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     lo = extend_flipped(extend(centre, -1), -1)
     hi = extend_flipped(extend(centre, +1), +1)
     # then across a band of blended markings (grey level on the other side of the ground's)
-    median = row_quantile(rect.values[:, inside], 0.5)
     band = np.nan_to_num((median - out_level) * -np.sign(reference)) > 0.5 * abs(reference)
 
     def reach(depth):

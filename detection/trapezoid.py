@@ -35,7 +35,7 @@ from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import median_of
 from visland.detection.pencil import (PencilEdges, PencilImage, as_slice, finite_median, pencil_edges, rectify, row_mean,
-                                      row_quantile)
+                                      row_quantile, row_quantiles)
 
 __all__ = ["Prediction", "RunwayHypothesis", "vanishing_point_candidates", "runway_hypotheses", "is_convincing_strip",
            "wider_strip_beside"]
@@ -433,8 +433,7 @@ def _strip_ends(rect: PencilImage, k_left: float, k_right: float, d_far: float, 
     with np.errstate(invalid="ignore"):
         out_level = row_quantile(rect.values[:, outside], 0.5)
         between = rect.values[:, as_slice(inside)]
-        low = row_quantile(between, 0.25)
-        high = row_quantile(between, 0.75)
+        low, high = row_quantiles(between, (0.25, 0.75))
     core_margin = params.strip_core_margin * (d_near - d_far)
     core = rect.rows_between(d_far + core_margin, d_near - core_margin)
     if core.sum() < 1:
