@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from visland.detection.horizon import HorizonFrame, meet_h
+from visland.detection.horizon import HorizonFrame, cross3, meet_h
 from visland.detection.params import DetectorParams
 from visland.detection.pencil import as_slice, finite_median, rectify, row_mean, row_quantile, row_quantiles
 from visland.detection.refine import MAD_TO_SIGMA, PixelLine, chroma_of, median_of
@@ -316,7 +316,7 @@ def transverse_line_h(horizon: HorizonFrame, s0: float, k_centre: float, depth: 
     """
     v2 = horizon.perpendicular_vanishing_point_h(s0)
     centre_point = horizon.pencil_point(s0, k_centre, depth)
-    line_h = np.cross(np.array([centre_point[0], centre_point[1], 1.0]), v2)
+    line_h = cross3(np.array([centre_point[0], centre_point[1], 1.0]), v2)
     return line_h / np.linalg.norm(line_h[:2])
 
 
@@ -356,7 +356,7 @@ def transverse_grid(horizon: HorizonFrame, s0: float, k_centre: float, line_left
     """
     v2 = horizon.perpendicular_vanishing_point_h(s0)
     centre_points = horizon.pencil_point(s0, k_centre, depths)                        # (m, 2)
-    transverse = np.cross(np.concatenate([centre_points, np.ones((len(depths), 1))], axis=1), v2)
+    transverse = cross3(np.concatenate([centre_points, np.ones((len(depths), 1))], axis=1), v2)
     ends_left = meet_h(transverse, line_left)
     ends_right = meet_h(transverse, line_right)
     grid = ends_left[:, None, :] + fractions[None, :, None] * (ends_right - ends_left)[:, None, :]

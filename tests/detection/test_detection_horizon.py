@@ -109,3 +109,19 @@ def test_horizon_outside_the_image():
     assert not looking_down.crosses_image(512, 512) and not looking_up.crosses_image(512, 512)
     assert looking_down.ground_bbox(512, 512) == (0, 0, 512, 512)
     assert looking_up.ground_bbox(512, 512) is None
+
+
+def test_cross3_is_numpys_cross_to_the_bit():
+    from visland.detection.horizon import cross3
+    rng = np.random.default_rng(11)
+    for shape_a, shape_b in [((3,), (3,)), ((9, 3), (3,)), ((3,), (5, 3)), ((4, 3), (4, 3)), ((2, 6, 3), (6, 3))]:
+        for _ in range(20):
+            a = rng.normal(size=shape_a) * 10.0 ** rng.uniform(-3, 4)
+            b = rng.normal(size=shape_b) * 10.0 ** rng.uniform(-3, 4)
+            expected = np.cross(a, b)
+            got = cross3(a, b)
+            assert got.shape == expected.shape and got.dtype == expected.dtype
+            assert np.array_equal(got, expected)
+    # a homogeneous line through two points holds both (a check independent of np.cross)
+    line = cross3(np.array([2.0, 3.0, 1.0]), np.array([-1.0, 7.0, 1.0]))
+    assert line @ np.array([2.0, 3.0, 1.0]) == 0.0 and line @ np.array([-1.0, 7.0, 1.0]) == 0.0
