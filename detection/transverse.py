@@ -359,11 +359,15 @@ def transverse_grid(horizon: HorizonFrame, s0: float, k_centre: float, line_left
     transverse = cross3(np.concatenate([centre_points, np.ones((len(depths), 1))], axis=1), v2)
     ends_left = meet_h(transverse, line_left)
     ends_right = meet_h(transverse, line_right)
-    grid = ends_left[:, None, :] + fractions[None, :, None] * (ends_right - ends_left)[:, None, :]
+    # u and v apart (the same sums and products as on the (m, n, 2) grid; numpy's loops over a
+    # last axis of 2 are slow)
+    across = ends_right - ends_left
+    grid_u = ends_left[:, None, 0] + fractions[None, :] * across[:, None, 0]
+    grid_v = ends_left[:, None, 1] + fractions[None, :] * across[:, None, 1]
+    grid = np.stack([grid_u, grid_v], axis=-1)
     height, width = image_shape[:2]
-    finite = np.isfinite(grid).all(axis=-1)
-    inside = finite & (grid[..., 0] >= 0) & (grid[..., 0] <= width - 1) & (grid[..., 1] >= 0) \
-        & (grid[..., 1] <= height - 1)
+    inside = (np.isfinite(grid_u) & np.isfinite(grid_v) & (grid_u >= 0) & (grid_u <= width - 1) & (grid_v >= 0)
+              & (grid_v <= height - 1))
     return ends_left, ends_right, grid, inside
 
 
