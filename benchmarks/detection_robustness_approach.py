@@ -142,6 +142,13 @@ def dh_at_100ft(run_dir, observers=OBSERVERS) -> dict:
     return out
 
 
+def diverged(run_dir, observers=OBSERVERS) -> dict:
+    """``{observer: time (s) it diverged}`` of the observers a run's metrics.json says diverged."""
+    path = Path(run_dir) / "metrics.json"
+    doc = json.loads(path.read_text())["observers"] if path.exists() else {}
+    return {name: doc[name]["diverged_t_s"] for name in observers if doc.get(name, {}).get("diverged_t_s") is not None}
+
+
 def passes(summary: dict, dh: dict) -> dict:
     """The must-show criteria of issue 11 for one condition (frames above 100 ft): found >= 99 %,
     near corner median <= 0.5 px, p95 <= 2 px, max <= 5 px, no gross error, |dpsi| median <=
@@ -179,12 +186,15 @@ def markdown_table(results: dict) -> list[str]:
         bands = [(b, v) for b, v in r["summary"].items() if b != "all"]
         worst = max(bands, key=lambda bv: (1 - bv[1]["found_rate"], bv[1]["near_corner_px"]["max"] or 0.0))
         dh = r["dh_100ft_m"]
+        lost = r.get("diverged", {})
+        dh_text = " / ".join(f"diverged at {lost[o]:.0f} s" if dh.get(o) is None and o in lost else _fmt(dh.get(o))
+                             for o in OBSERVERS)
         lines.append(
             f"| {name} | {s['frames']} | {100 * s['found_rate']:.1f} % | {s['gross']} | {s['withheld']} "
             f"| {_fmt(c['median'])} / {_fmt(c['p95'])} / {_fmt(c['max'])} | {_fmt(e['median'])} / {_fmt(e['p95'])} "
             f"| {_fmt(s['dpsi_abs_err_deg']['median'], 3)} "
             f"| {worst[0]}: {100 * worst[1]['found_rate']:.0f} %, {_fmt(worst[1]['near_corner_px']['max'])} "
-            f"| {_fmt(dh.get('ccpi-hg-2p'))} / {_fmt(dh.get('ekf-2l'))} | {'yes' if r['pass']['all'] else 'no'} |")
+            f"| {dh_text} | {'yes' if r['pass']['all'] else 'no'} |")
     return lines
 
 
@@ -216,7 +226,7 @@ def _save_failures(job, rows: list[dict], folder: Path, limit: int) -> list[str]
 
 def run_condition(name: str, args) -> tuple[list[dict], dict, Path, Path]:
     """Fly, render and measure condition ``name`` (or reuse its folders); returns its rows, dH at
-    100 ft, and the dataset and run folders."""
+    100 ft, the observers that diverged (:func:`diverged`) and the run folder."""
     from dataclasses import replace
 
     from visland.camera import CameraModel
@@ -241,7 +251,7 @@ def run_condition(name: str, args) -> tuple[list[dict], dict, Path, Path]:
     if args.save_failures:
         for path in _save_failures(job, rows, root / "failures", args.save_failures):
             print(f"    wrote {path}", flush=True)
-    return rows, dh_at_100ft(run), dataset, run
+    return rows, dh_at_100ft(run), diverged(run), run
 
 
 def main(argv=None) -> int:
@@ -277,14 +287,14 @@ def main(argv=None) -> int:
         for name in args.conditions:
             tic = time.perf_counter()
             try:
-                rows, dh, _, _ = run_condition(name, args)
+                rows, dh, lost, _ = run_condition(name, args)
             except Exception as error:            # one condition failing must not lose the others
                 print(f"{name:28s} FAILED: {type(error).__name__}: {error}", flush=True)
                 results[name] = {"error": f"{type(error).__name__}: {error}"}
                 continue
             summary = summarise_rows(rows)
             verdict = passes(summary, dh)
-            results[name] = {"summary": summary, "dh_100ft_m": dh, "pass": verdict}
+            results[name] = {"summary": summary, "dh_100ft_m": dh, "diverged": lost, "pass": verdict}
             all_rows += rows
             for row in rows:
                 frames_writer.writerow({k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items()})

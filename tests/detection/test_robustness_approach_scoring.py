@@ -112,3 +112,12 @@ def test_summary_and_verdict_count_the_planted_errors(study, folders):
     assert not study.passes(study.summarise_rows(clean), {"ccpi-hg-2p": 0.31})["all"]
     table = study.markdown_table({"c": {"summary": study.summarise_rows(rows), "dh_100ft_m": dh, "pass": verdict}})
     assert len(table) == 3 and table[2].startswith("| c |") and "-0.25 / -" in table[2]
+    # an observer that diverged has no 100 ft error; the table says when it diverged
+    (run / "metrics.json").write_text(json.dumps({"observers": {
+        "ccpi-hg-2p": {"err_100ft_m": None, "diverged_t_s": 48.1}, "ekf-2l": {"err_100ft_m": 1.5, "diverged_t_s": None}}}))
+    dh, lost = study.dh_at_100ft(run), study.diverged(run)
+    assert dh == {"ccpi-hg-2p": None, "ekf-2l": 1.5} and lost == {"ccpi-hg-2p": 48.1}
+    assert not study.passes(study.summarise_rows(clean), dh)["dh_100ft"]
+    table = study.markdown_table({"c": {"summary": study.summarise_rows(clean), "dh_100ft_m": dh, "diverged": lost,
+                                        "pass": study.passes(study.summarise_rows(clean), dh)}})
+    assert "| diverged at 48 s / 1.50 | no |" in table[2]
