@@ -193,7 +193,7 @@ def process_input(input_path, out_dir, options: ProcessOptions | None = None, fo
 
 
 def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = None, force: bool = False,
-                 echo=print) -> dict:
+                 echo=print, run_processes: int = 1) -> dict:
     """Process ``input_path`` with several measurement sources (``{source: out_dir}``), decoding
     every frame once; one run folder per source. Returns ``{source: run.json content}``.
 
@@ -212,6 +212,11 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
         Replace existing output folders (else ``ValueError``).
     echo : callable, optional
         Takes each printed line (a str).
+    run_processes : int, optional
+        With more than 1 and several sources, each source's estimation, metrics and report (what
+        follows the last frame) run side by side: all but the last source in spawned processes
+        (at most ``run_processes``), the last here (:func:`_write_runs_side_by_side`). Same files;
+        the printed lines come out in the sources' order, as one after the other.
 
     Returns
     -------
@@ -253,11 +258,61 @@ def process_many(input_path, out_dirs: dict, options: ProcessOptions | None = No
         echo(f"{source.name}: {source.timing}")
     measured = measure_many(source, list(out_dirs), init=options.init, quiet=options.quiet,
                             windows=_filter_windows(options) if options.windows == "dickmanns-4d" else None)
+    if run_processes > 1 and len(out_dirs) > 1:
+        return _write_runs_side_by_side(source, measured, out_dirs, options, estimate_options, input_path, force,
+                                        started, echo, run_processes)
     runs = {}
     for kind, out_dir in out_dirs.items():
         runs[kind] = _write_run(source, measured[kind], replace(options, source=kind), estimate_options,
                                 input_path, out_dir, force, started, echo)
     return runs
+
+
+def _portable(source):
+    """What :func:`_write_run` reads of ``source``, without the frames (picklable: a frame source
+    may hold a decoder, a renderer or threads)."""
+    from types import SimpleNamespace
+    return SimpleNamespace(**{name: getattr(source, name, None)
+                              for name in ("name", "camera", "telemetry", "truth", "labels", "runway_json", "timing")})
+
+
+def _write_run_task(source, measurements, options, estimate_options, input_path, out_dir, force, started):
+    """:func:`_write_run` in a spawned process: ``(run, printed lines)``."""
+    lines: list = []
+    run = _write_run(source, measurements, options, estimate_options, input_path, out_dir, force, started,
+                     lines.append)
+    return run, lines
+
+
+def _write_runs_side_by_side(source, measured, out_dirs, options, estimate_options, input_path, force, started,
+                             echo, processes: int) -> dict:
+    """:func:`_write_run` for every source at once: all but the last in at most ``processes``
+    spawned processes, the last in this one. The runs are the serial ones (the same calls on the
+    same measurements); the lines each prints are echoed in the sources' order once all are done.
+
+    With two sources on two cores this halves the time after the last frame (each run's
+    estimation by every observer and its report's plots are single-threaded Python).
+    """
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+    kinds = list(out_dirs)
+    portable = _portable(source)
+    runs: dict = {}
+    lines: dict = {kind: [] for kind in kinds}
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(processes, len(kinds) - 1), mp_context=context) as pool:
+        futures = {kind: pool.submit(_write_run_task, portable, measured[kind], replace(options, source=kind),
+                                     estimate_options, input_path, out_dirs[kind], force, started)
+                   for kind in kinds[:-1]}
+        last = kinds[-1]
+        runs[last] = _write_run(portable, measured[last], replace(options, source=last), estimate_options,
+                                input_path, out_dirs[last], force, started, lines[last].append)
+        for kind, future in futures.items():
+            runs[kind], lines[kind] = future.result()
+    for kind in kinds:
+        for line in lines[kind]:
+            echo(line)
+    return {kind: runs[kind] for kind in kinds}
 
 
 def _filter_windows(options: ProcessOptions):

@@ -444,7 +444,7 @@ def stream_process(job, dataset_dir, run_dirs: dict, options, workers: int = 1, 
         if keep_frames else None
     source = RenderedSource(dataset_dir, job, result, workers=workers, writer=writer)
     try:
-        runs = process_many(source, run_dirs, options, force=True, echo=echo)
+        runs = process_many(source, run_dirs, options, force=True, echo=echo, run_processes=workers)
     finally:
         if writer is not None:
             tic = time.perf_counter()

@@ -158,3 +158,28 @@ def test_a_failing_render_reaches_the_consumer_and_leaves_no_shared_memory_behin
     with pytest.raises(TypeError, match="not_a_runway_field"):
         list(_rendered_source(tmp_path, workers=2)._rendered())
     assert len(shared_blocks) == 4 and not _left_in_dev_shm(shared_blocks)
+
+
+@pytest.mark.slow
+def test_runs_written_side_by_side_are_the_serial_runs(file_route, tmp_path):
+    """Independent truth: the same sources' runs written one after the other (``run_processes=1``)."""
+    serial_lines, side_lines = [], []
+    serial = process_many(file_route / "dataset", {s: tmp_path / "serial" / s for s in SOURCES}, OPTIONS,
+                          echo=serial_lines.append)
+    side = process_many(file_route / "dataset", {s: tmp_path / "side" / s for s in SOURCES}, OPTIONS,
+                        echo=side_lines.append, run_processes=2)
+    assert list(side) == list(serial) == list(SOURCES)
+    for kind in SOURCES:
+        assert side[kind]["n_found"] == serial[kind]["n_found"] > 0
+        for name in ("measurements.csv", "estimates.csv", "metrics.json"):
+            assert (tmp_path / "side" / kind / name).read_bytes() == (tmp_path / "serial" / kind / name).read_bytes()
+    # the same lines in the same order (the sources' order) but the measured speeds
+    def steady(lines, folder):
+        import re
+        return [re.sub(r"\d+ us/step", "N us/step", line.replace(str(tmp_path / folder), "OUT"))
+                for line in lines if "frames/s" not in line]
+    assert steady(side_lines, "side") == steady(serial_lines, "serial")
+    lines = steady(side_lines, "side")
+    about = [k for k, line in enumerate(lines) for kind in SOURCES if f"OUT/{kind}" in line and kind == SOURCES[0]]
+    after = [k for k, line in enumerate(lines) if f"OUT/{SOURCES[1]}" in line]
+    assert about and after and max(about) < min(after)       # every line of the first source, then the second's
