@@ -187,8 +187,8 @@ def markdown_table(results: dict) -> list[str]:
         worst = max(bands, key=lambda bv: (1 - bv[1]["found_rate"], bv[1]["near_corner_px"]["max"] or 0.0))
         dh = r["dh_100ft_m"]
         lost = r.get("diverged", {})
-        dh_text = " / ".join(f"diverged at {lost[o]:.0f} s" if dh.get(o) is None and o in lost else _fmt(dh.get(o))
-                             for o in OBSERVERS)
+        dh_text = " / ".join(_fmt(dh[o]) if dh.get(o) is not None else
+                             (f"diverged at {lost[o]:.0f} s" if o in lost else "no estimate") for o in OBSERVERS)
         lines.append(
             f"| {name} | {s['frames']} | {100 * s['found_rate']:.1f} % | {s['gross']} | {s['withheld']} "
             f"| {_fmt(c['median'])} / {_fmt(c['p95'])} / {_fmt(c['max'])} | {_fmt(e['median'])} / {_fmt(e['p95'])} "
