@@ -268,14 +268,15 @@ def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: fl
     height, width = image.shape[:2]
     outside = ((map_u < -0.5) | (map_v < -0.5) | (map_u > width - 0.5) | (map_v > height - 0.5)
                | ~np.isfinite(map_u) | ~np.isfinite(map_v))
-    inside_u, inside_v = map_u[~outside], map_v[~outside]
-    if inside_u.size == 0:
+    inside = ~outside
+    if not inside.any():
         return np.full((n, len(offsets)), np.nan, np.float32), offsets
-    # interpolate on a float32 crop of the frame around the samples (exact grey levels)
-    u0 = max(0, int(math.floor(inside_u.min())) - 1)
-    v0 = max(0, int(math.floor(inside_v.min())) - 1)
-    u1 = min(width, int(math.ceil(inside_u.max())) + 2)
-    v1 = min(height, int(math.ceil(inside_v.max())) + 2)
+    # interpolate on a float32 crop of the frame around the samples (exact grey levels; the
+    # extremes over the samples inside, reductions with a mask: no copies)
+    u0 = max(0, int(math.floor(map_u.min(where=inside, initial=np.inf))) - 1)
+    v0 = max(0, int(math.floor(map_v.min(where=inside, initial=np.inf))) - 1)
+    u1 = min(width, int(math.ceil(map_u.max(where=inside, initial=-np.inf))) + 2)
+    v1 = min(height, int(math.ceil(map_v.max(where=inside, initial=-np.inf))) + 2)
     crop = image[v0:v1, u0:u1]
     crop = np.asarray(chroma_of(crop) if crop.ndim == 3 else crop, dtype=np.float32)
     map_u = np.where(outside, -10.0, map_u - u0).astype(np.float32)
