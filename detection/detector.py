@@ -35,7 +35,7 @@ from visland.detection.params import DetectorParams
 from visland.detection.refine import LineFit, NoFit, PixelLine, chroma_boundary, chroma_of, refine_line
 from visland.detection.result import DetectionResult, not_found
 from visland.detection.threshold_marking import ground_begins, threshold_marking
-from visland.detection.transverse import find_transverse_line, surface_extent
+from visland.detection.transverse import find_transverse_line, pavement_beyond_edges, surface_extent
 from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
                                          wider_strip_beside)
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
@@ -873,6 +873,16 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             near = moved
         elif moved is False:
             notes.append("threshold withheld: pavement continues before the step found")
+            near = None
+    if near is not None:
+        # a transverse edge that carries on beyond the runway's edges is a pavement's crossing or
+        # joining it there (the runway continues past it, or begins elsewhere), not the threshold
+        beyond = pavement_beyond_edges(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
+                                       near.depth_px, 1, colour=ctx.colour, surface_level=surface_level,
+                                       params=params)
+        if beyond:
+            notes.append(f"threshold withheld: its step continues beyond the runway's {' and '.join(beyond)} "
+                         f"edge{'s' if len(beyond) > 1 else ''} (a pavement crossing or joining the runway there)")
             near = None
     if near is not None and far is not None and far.spans:
         # a runway is a long strip (params.min_length_to_width widths at least): an "end" found

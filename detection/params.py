@@ -80,7 +80,7 @@ NOT_SCALED_PX = (
     "net_step_outside_px", "net_step_inside_px",
     # depth profiles' smoothing across a threshold or runway end, sub-pixel (transverse)
     "transverse_smooth_sigma_px", "transverse_light_sigma_px", "transverse_inner_px", "transverse_outer_px",
-    "faint_texture_max_width_px",
+    "faint_texture_max_width_px", "crossing_pavement_depth_px", "crossing_pavement_min_width_px",
     # calibrated sub-pixel corrections of an area-sampled boundary (refine)
     "boundary_flank_bias_px", "boundary_stripe_shift_px", "boundary_stripe_resolved_px",
     "boundary_stripe_shift_scale_px",
@@ -319,6 +319,17 @@ class DetectorParams(ParamsFile):
         texture by the second fraction of the smallest step, above the ground's spread by the
         third factor, standing out of the profile's noise by the fourth, is a band of distant
         stripes.
+    crossing_pavement_band, crossing_pavement_depth_px : tuple of 2 float
+        A threshold's step is checked beside the runway (:func:`transverse.pavement_beyond_edges`)
+        between these runway widths beyond each edge, comparing the mean levels this many depth
+        pixels on either side of the line ...
+    crossing_pavement_share, crossing_pavement_ground_tolerance : float
+        ... where a step of at least this fraction of the step between the edges, in each half
+        of the band, whose outer side has the level of the ground between the edges (within this
+        fraction of the step beside), is a pavement crossing or joining the runway there: the
+        threshold is withheld ...
+    crossing_pavement_min_width_px : float
+        ... where a runway width along the runway spans at least this many depth pixels.
     transverse_smooth_sigma_px, transverse_light_sigma_px : float
         Sigmas (pixels of depth) of the Gaussians smoothing those depth profiles before they are
         differentiated, and lightly for the fit of the boundary.
@@ -719,6 +730,11 @@ class DetectorParams(ParamsFile):
     faint_texture_min_change: float = 0.1
     faint_texture_k_sigma: float = 3.0
     faint_texture_min_significance: float = 5.0
+    crossing_pavement_band: tuple = (0.25, 1.0)
+    crossing_pavement_depth_px: tuple = (1.0, 3.0)
+    crossing_pavement_share: float = 0.5
+    crossing_pavement_ground_tolerance: float = 0.5
+    crossing_pavement_min_width_px: float = 2.0
     transverse_smooth_sigma_px: float = 0.8
     transverse_light_sigma_px: float = 0.3
     strip_end_clearance_px: float = 3.0
@@ -906,6 +922,9 @@ class DetectorParams(ParamsFile):
         "transverse_outer_px": (0.0, 1000.0), "transverse_outer_fraction": (0.0, 1.0),
         "faint_texture_max_width_px": (0.0, 100000.0), "faint_texture_min_change": (0.0, 10.0),
         "faint_texture_k_sigma": (0.0, 100.0), "faint_texture_min_significance": (0.0, 100.0),
+        "crossing_pavement_band": (0.0, 10.0), "crossing_pavement_depth_px": (0.0, 100.0),
+        "crossing_pavement_share": (0.0, 10.0), "crossing_pavement_ground_tolerance": (0.0, 10.0),
+        "crossing_pavement_min_width_px": (0.0, 10000.0),
         "transverse_smooth_sigma_px": (0.05, 100.0, "open"),
         "transverse_light_sigma_px": (0.05, 100.0, "open"), "strip_end_clearance_px": (0.0, 1000.0),
         "parallel_score_ratio": (0.0, 10.0), "parallel_min_width_ratio": (1.0, 100.0),

@@ -35,7 +35,7 @@ from visland.detection.pencil import as_slice, finite_median, rectify, row_mean,
 from visland.detection.refine import MAD_TO_SIGMA, PixelLine, chroma_of, median_of
 
 __all__ = ["TransverseLine", "SurfaceExtent", "find_transverse_line", "surface_extent", "edge_crossings_s",
-           "transverse_grid", "transverse_line_h"]
+           "transverse_grid", "transverse_line_h", "pavement_beyond_edges"]
 
 
 class SurfaceExtent(tuple):
@@ -550,6 +550,140 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     return TransverseLine(line_h=line_h, corner_left_uv=meet_h(line_h, line_left),
                           corner_right_uv=meet_h(line_h, line_right), depth_px=depth,
                           step=step, significance=significance, method=method, spans=spans)
+
+
+def pavement_beyond_edges(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
+                          depth: float, outward: int, colour=None, surface_level: float = math.nan,
+                          params: DetectorParams | None = None) -> tuple[str, ...]:
+    """The sides beyond whose edge the transverse step at ``depth`` continues: a pavement crossing
+    or joining the runway there, not the runway's own start (issue 11: a transverse edge is the
+    threshold only if it is not part of a crossing pavement that continues outside the runway).
+
+    At a threshold the runway's surface meets the ground across the width, and beside the runway
+    the ground runs on across the line. Where a taxiway crosses or joins the runway, its edge is
+    a transverse line too, and it carries on beyond the runway's edges: beside the runway, the
+    line's inner side (towards the runway's surface) is pavement and its outer side is the ground
+    that lies before the line between the edges. A side counts when, on the transverse lines
+    through V2 (:func:`transverse_grid`) between ``params.crossing_pavement_band`` runway widths
+    beyond its edge, the mean level ``params.crossing_pavement_depth_px`` depth pixels outside
+    the line differs from that inside it by at least ``params.crossing_pavement_share`` of the
+    step between the edges (in grey levels, of the larger of that step and the runway surface's
+    own contrast with the ground, ``surface_level``: blended threshold stripes can bring the step
+    near the ground's level; and at least half of ``params.min_contrast``), the same way in each half of
+    the band, and the outside there has the level of the ground between the edges (within
+    ``params.crossing_pavement_ground_tolerance`` of the step beside). Only where a runway width
+    along the runway spans ``params.crossing_pavement_min_width_px`` depth pixels or more: farther
+    out, a pavement joining a width past the threshold lies within the pixels read, and a crossing
+    pavement's width moves the threshold by less than that. A taxiway joining the
+    approach side of a true threshold flush with it has pavement on the line's outer side: it
+    does not count. Read in the chroma when ``colour`` is given and the chroma steps across the
+    line by ``params.transverse_chroma_min_step`` between the edges (pavement is grey, grass and
+    fields are not; in grey levels the grass's own shading can step as much), else in grey levels.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W)
+        Grey levels of the whole frame.
+    horizon : HorizonFrame
+        Horizon of the frame (the transverse lines meet it at V2).
+    s0 : float
+        The runway's vanishing point V1 on the horizon, pixels from Q.
+    left, right : PixelLine
+        The refined left and right edges.
+    depth : float
+        Depth (pixels below the horizon) where the transverse line crosses the centre line.
+    outward : int
+        +1 for the threshold (outside at larger depth), -1 for the runway end.
+    colour : ndarray of uint8, shape (H, W, 3), optional
+        The RGB frame, for the chroma.
+    surface_level : float, optional
+        The runway surface's own grey level (:func:`surface_extent`), NaN if unknown.
+    params : DetectorParams, optional
+        ``crossing_pavement_*``, ``transverse_column_span``, ``transverse_chroma_min_step``,
+        ``min_contrast``.
+
+    Returns
+    -------
+    tuple of str
+        ``"left"``, ``"right"``, both or none.
+    """
+    params = params or DetectorParams()
+    line_left, line_right = left.homogeneous(), right.homogeneous()
+    d_ref = max(float(depth), 1.0)
+    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_ref)
+    if not (math.isfinite(s_left) and math.isfinite(s_right)):
+        return ()
+    k_centre = (0.5 * (s_left + s_right) - s0) / d_ref
+    # one runway width farther along than depth d lies at depth fx / (fx / d + k), k = W / h
+    fx = horizon.camera.fx
+    width_px = depth - fx / (fx / depth + abs(s_right - s_left) / d_ref)
+    if not width_px >= params.crossing_pavement_min_width_px:
+        return ()
+    near_px, far_px = params.crossing_pavement_depth_px
+    offsets = np.arange(-far_px, far_px + 1e-9, 0.5)
+    depths = depth + outward * offsets
+    if depths.min() <= 0.5:
+        return ()
+    inner_band = (offsets <= -near_px)                     # the line's runway side
+    outer_band = (offsets >= near_px)
+    b0, b1 = params.crossing_pavement_band
+    half = 4
+    groups = {"inside": np.linspace(*params.transverse_column_span, 2 * half),
+              "left": np.linspace(-b1, -b0, 2 * half), "right": 1.0 + np.linspace(b0, b1, 2 * half)}
+    fractions = np.concatenate(list(groups.values()))
+    _, _, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths, fractions, image.shape)
+    if not inside.any():
+        return ()
+    height, width = image.shape[:2]
+    u0 = int(max(0, math.floor(grid[..., 0][inside].min()) - 1))
+    v0 = int(max(0, math.floor(grid[..., 1][inside].min()) - 1))
+    u1 = int(min(width, math.ceil(grid[..., 0][inside].max()) + 2))
+    v1 = int(min(height, math.ceil(grid[..., 1][inside].max()) + 2))
+    maps = (np.where(inside, grid[..., 0] - u0, -10.0).astype(np.float32),
+            np.where(inside, grid[..., 1] - v0, -10.0).astype(np.float32))
+
+    def levels_of(channel):
+        values = _transverse_values(channel, maps, inside)
+        levels = {}                       # group (or half) -> (inner side's mean, outer side's mean)
+        start = 0
+        for name in groups:
+            parts = {name: slice(start, start + 2 * half), name + "/a": slice(start, start + half),
+                     name + "/b": slice(start + half, start + 2 * half)}
+            for key, cols in parts.items():
+                block = values[:, cols]
+                ok = np.isfinite(block)
+                if ok[inner_band].mean() < 0.5 or ok[outer_band].mean() < 0.5:
+                    continue
+                levels[key] = (float(np.nanmean(block[inner_band])), float(np.nanmean(block[outer_band])))
+            start += 2 * half
+        return levels
+
+    levels = None
+    if colour is not None:
+        levels = levels_of(chroma_of(colour[v0:v1, u0:u1]))
+        if "inside" not in levels or \
+                abs(levels["inside"][1] - levels["inside"][0]) < params.transverse_chroma_min_step:
+            levels = None                         # the chroma does not tell the pavement from the ground here
+        reference = math.nan
+    if levels is None:
+        levels = levels_of(image[v0:v1, u0:u1])
+        reference = surface_level
+    if "inside" not in levels:
+        return ()
+    surface, ground = levels["inside"]
+    step_inside = max(abs(ground - surface), abs(ground - reference) if math.isfinite(reference) else 0.0)
+    floor = max(params.crossing_pavement_share * step_inside, 0.5 * params.min_contrast)
+    sides = []
+    for side in ("left", "right"):
+        if not all(key in levels for key in (side, side + "/a", side + "/b")):
+            continue
+        inner, outer = levels[side]
+        step = outer - inner
+        halves = [levels[side + p][1] - levels[side + p][0] for p in ("/a", "/b")]
+        if (abs(step) >= floor and all(h * step > 0 and abs(h) >= floor for h in halves)
+                and abs(outer - ground) <= params.crossing_pavement_ground_tolerance * abs(step)):
+            sides.append(side)
+    return tuple(sides)
 
 
 def _transition(profile, depths, depth, outward, reach: float = 3.0) -> float:
