@@ -642,20 +642,33 @@ def pavement_beyond_edges(image, horizon: HorizonFrame, s0: float, left: PixelLi
     maps = (np.where(inside, grid[..., 0] - u0, -10.0).astype(np.float32),
             np.where(inside, grid[..., 1] - v0, -10.0).astype(np.float32))
 
+    n_inner, n_outer = int(inner_band.sum()), int(outer_band.sum())
+    names = list(groups)
+
     def levels_of(channel):
+        """group (or half: "left/a", "left/b") -> (inner side's mean, outer side's mean), where at
+        least half the samples of each side are in the frame"""
         values = _transverse_values(channel, maps, inside)
-        levels = {}                       # group (or half) -> (inner side's mean, outer side's mean)
-        start = 0
-        for name in groups:
-            parts = {name: slice(start, start + 2 * half), name + "/a": slice(start, start + half),
-                     name + "/b": slice(start + half, start + 2 * half)}
-            for key, cols in parts.items():
-                block = values[:, cols]
-                ok = np.isfinite(block)
-                if ok[inner_band].mean() < 0.5 or ok[outer_band].mean() < 0.5:
-                    continue
-                levels[key] = (float(np.nanmean(block[inner_band])), float(np.nanmean(block[outer_band])))
-            start += 2 * half
+        finite = np.isfinite(values)
+        filled = np.where(finite, values, 0.0)
+        # sums and counts of each side of the line per half group (columns in blocks of
+        # ``half``), then per group (two halves)
+        sums = np.stack([filled[inner_band].sum(axis=0), filled[outer_band].sum(axis=0)])
+        counts = np.stack([finite[inner_band].sum(axis=0), finite[outer_band].sum(axis=0)])
+        sums, counts = sums.reshape(2, -1, half).sum(axis=2), counts.reshape(2, -1, half).sum(axis=2)
+        needed = 0.5 * half * np.array([[n_inner], [n_outer]])
+        whole_sums, whole_counts = sums.reshape(2, -1, 2).sum(axis=2), counts.reshape(2, -1, 2).sum(axis=2)
+        halves_ok = (counts >= needed).all(axis=0)
+        whole_ok = (whole_counts >= 2 * needed).all(axis=0)
+        halves_mean = sums / np.maximum(counts, 1)
+        whole_mean = whole_sums / np.maximum(whole_counts, 1)
+        levels = {}
+        for g, name in enumerate(names):
+            if whole_ok[g]:
+                levels[name] = (float(whole_mean[0, g]), float(whole_mean[1, g]))
+            for h, suffix in ((2 * g, "/a"), (2 * g + 1, "/b")):
+                if halves_ok[h]:
+                    levels[name + suffix] = (float(halves_mean[0, h]), float(halves_mean[1, h]))
         return levels
 
     levels = None
