@@ -6,9 +6,10 @@ OpenCV's MPEG-4 instead), and the video is put in a folder of its own with camer
 truth.csv and a telemetry.csv whose times run ``--offset`` seconds behind the frames' (as a
 recorder with its own clock would write them). A ninth input is the first video cut in the
 middle of its file (a recording that was not closed). Then ``visland process`` runs on all the
-videos in one call: with ``--estimate-offset``, with the exact ``--time-offset`` (one after
-the other, on ``--workers 2`` and on a local Dask cluster of two single-threaded workers), and
-the estimated offsets, the dH errors at 100 ft and the wall times are compared.
+videos in one call: with ``--estimate-offset`` (on ``--workers 2`` and on a local Dask cluster
+of two single-threaded workers), with the exact ``--time-offset`` (one after the other, on
+``--workers 2`` and on the Dask cluster), and the estimated offsets, the dH errors at 100 ft and
+the wall times are compared.
 
 Usage::
 
@@ -106,6 +107,7 @@ def main(argv=None) -> int:
         cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                dashboard_address=None)
         batches.append(("exact-dask", ["--time-offset", args.offset, "--scheduler", cluster.scheduler_address]))
+        batches.append(("estimated-dask", ["--estimate-offset", "--scheduler", cluster.scheduler_address]))
     for label, extra in batches:
         out = work / f"batch-{label}"
         tic = time.perf_counter()
