@@ -383,7 +383,12 @@ def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
         return None, (f"no pair of edges meeting on the horizon among {len(lines)} candidate lines "
                       f"({len(segments)} Hough segments)")
     reasons = []
+    failed_strips = []
     for hypothesis in hypotheses[:3]:
+        if any(wider_strip_beside(hypothesis, strip, params) for strip in failed_strips):
+            # of parallel strips the runway is the widest: when it cannot be measured, a narrower
+            # strip beside it (a parallel taxiway) is not taken in its place
+            continue
         result, why = _measure(ctx, hypothesis, mode, roi)
         if result is not None:
             return result, None
@@ -392,6 +397,9 @@ def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
             # the best-ranked runway that holds together geometrically decides: a weaker-ranked
             # one (a taxiway beside it) is not taken in its place
             break
+        if is_convincing_strip(hypothesis, params) and not why.startswith(("left edge", "right edge")):
+            # (both its edges were measured: a strip, failing as one runway's pair of sides)
+            failed_strips.append(hypothesis)
     return None, reasons[0]
 
 

@@ -88,3 +88,20 @@ def test_a_pavement_crossing_before_the_threshold_is_not_reported_as_the_thresho
     result = detect_runway(plain, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
     assert result.found and result.corners_found[:2].all(), result.reason
     assert np.linalg.norm(result.corners_uv[:2] - labels.corners_uv[0, :2], axis=1).max() < 1.0
+
+
+@pytest.mark.slow
+def test_a_parallel_taxiway_is_not_measured_in_place_of_a_runway_that_fails():
+    """Ray-cast airport, 768 px, 1500 m, a taxiway joining the runway's right side just before
+    the threshold: the runway (the best strip) fails its measurement (its refined edges meet the
+    horizon 4.1 px apart, tolerance 4.0), and the parallel taxiway 185 m to its left, a narrower
+    strip beside it, was measured in its place (found, edges 58 px off). Of parallel strips the
+    runway is the widest: the frame must not be found on the taxiway (found with both edges
+    within 2 px of the exact labels, or not found)."""
+    from tests.helpers.detection_frames import edge_error_px
+    camera = CameraModel.default(768)
+    scene = PaintedAirport(seed=4, joining_taxiways=((-11.5, 1, 90.0, 150.0),), taxiway_grey=84.0)
+    image, state, labels = airport_frame("thesis-3", 1500.0, camera, scene)
+    result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    if result.found:
+        assert max(edge_error_px(camera, labels, result, side) for side in ("left", "right")) < 2.0, result.reason
