@@ -422,15 +422,24 @@ def _wider_strip_in_chroma(hypotheses, chroma, ctx: _Context, lines, bottom_dept
                                   vanishing_points=[best.s0])
     if not in_chroma:
         return hypotheses
-    top = in_chroma[0]
-    if not is_convincing_strip(top, params):
-        return hypotheses
     # the first convincing grey strip it is wider beside: the grey levels' best, or one ranked
     # after a strip that is no paved strip along it (a bright building beside the parallel
-    # taxiway outscored both at 2500 m; the taxiway was then measured in the runway's place)
-    narrower = next((i for i, h in enumerate(hypotheses)
-                     if is_convincing_strip(h, params) and wider_strip_beside(h, top, params)), None)
-    if narrower is None:
+    # taxiway outscored both at 2500 m; the taxiway was then measured in the runway's place).
+    # Every convincing chroma strip scoring at least ``parallel_score_ratio`` of the chroma's
+    # best is tried, not only the first, and the one wider beside the best-ranked grey strip
+    # goes (the chroma's ranking breaks ties): a wide low-chroma area around the parallel
+    # taxiway (oblique, 1200x23 at 3 km) was ranked ahead of the concrete runway and was wider
+    # beside the other taxiway only, and the first taxiway was measured
+    top, narrower = None, None
+    floor = params.parallel_score_ratio * max(h.score for h in in_chroma)
+    for candidate in in_chroma:
+        if candidate.score < floor or not is_convincing_strip(candidate, params):
+            continue
+        index = next((i for i, h in enumerate(hypotheses)
+                      if is_convincing_strip(h, params) and wider_strip_beside(h, candidate, params)), None)
+        if index is not None and (narrower is None or index < narrower):
+            top, narrower = candidate, index
+    if top is None:
         return hypotheses
     top = replace(top, centre_polarity=0, evidence={**top.evidence, "channel": "chroma"})
     return (hypotheses[:narrower] + [top]

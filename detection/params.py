@@ -239,6 +239,14 @@ class DetectorParams(ParamsFile):
     pair_min_interior : float
         A pair whose inside differs from its outside by less than this fraction of its edges'
         step (the sign the edges say) is not a strip.
+    pair_min_off_ground, pair_ground_test_max_width : float
+        A pair narrower than ``pair_ground_test_max_width`` (``k_R - k_L``, width over height)
+        whose inside lies within ``pair_min_off_ground`` of its inside-outside step from the
+        ground's grey level (the median of the whole pencil's rows) is ground between two
+        pavements (the grass between a runway and its parallel taxiway), not a strip: a runway's
+        inside is pavement and its outsides are ground (the ratio is about 1), here the other way
+        round (0.03 at 3.6 km on "16 stripes, 30 m wide"). Wider pairs fill the pencil's rows
+        (close to the ground) and are not tested.
     pair_interior_margin : float
         The inside of a pair is read from this fraction of the width in from each edge.
     pair_quick_centre_gap, pair_centre_gap : float
@@ -687,6 +695,8 @@ class DetectorParams(ParamsFile):
     pair_length_scale_px: float = 30.0
     pair_max_examined: int = 24
     pair_min_interior: float = 0.1
+    pair_min_off_ground: float = 0.3
+    pair_ground_test_max_width: float = 2.0
     pair_interior_margin: float = 0.12
     pair_quick_centre_gap: float = 0.05
     pair_centre_gap: float = 0.08
@@ -903,7 +913,7 @@ class DetectorParams(ParamsFile):
         "pencil_column_coverage": (0.0, 1.0, "open"), "pencil_max_edges": (2, 10000, "int"),
         "min_length_to_width": (0.0, 1000.0), "pair_min_width_px": (0.0, 1000.0),
         "pair_length_scale_px": (0.1, 10000.0), "pair_max_examined": (1, 10000, "int"),
-        "pair_min_interior": (0.0, 1.0), "pair_interior_margin": (0.0, 0.5), "pair_quick_centre_gap": (0.0, 0.5),
+        "pair_min_interior": (0.0, 1.0), "pair_min_off_ground": (0.0, 10.0), "pair_ground_test_max_width": (0.0, 100.0), "pair_interior_margin": (0.0, 0.5), "pair_quick_centre_gap": (0.0, 0.5),
         "pair_centre_gap": (0.0, 0.5), "pair_outside_band": (0.0, 5.0), "score_symmetry_floor": (0.0, 100.0),
         "score_outside_floor": (0.0, 100.0), "score_centre_floor": (0.0, 100.0), "score_uniform_floor": (0.0, 1.0),
         "score_spread_scale": (0.01, 100.0),

@@ -319,6 +319,12 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
         interior_term = float(np.clip(expected * inside["interior"] / contrast, 0.0, 1.0))
         if interior_term <= params.pair_min_interior:
             continue
+        # the ground between two pavements (a runway and its parallel taxiway): its inside has the
+        # ground's grey level and its outsides do not, where a runway is the other way round
+        off_ground = abs(inside["inside_minus_ground"])
+        if (float(width[p]) < params.pair_ground_test_max_width and math.isfinite(off_ground)
+                and off_ground < params.pair_min_off_ground * abs(inside["interior"])):
+            continue
         step = max(abs(inside["interior"]), contrast)
         outside_term = float(np.clip(1.0 - abs(inside["outside_gap"]) / step, 0.0, 1.0))
         uniform_term = float(np.clip(1.0 - inside["spread"] / (params.score_spread_scale * step),
