@@ -54,6 +54,13 @@ __all__ = ["DetectionSequence"]
 IMAGE_HORIZON_SIGMA_DEG = 0.15
 
 
+def _refused(result: DetectionResult, why: str) -> DetectionResult:
+    """``result`` refused by a sequence check: not found, saying ``"refused: " + why``, with the
+    frame's attitude, mode, size and time kept."""
+    return not_found(f"refused: {why}", roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
+                     image_size=result.image_size, elapsed_s=result.elapsed_s)
+
+
 class DetectionSequence:
     """Stateful frame-after-frame detection (see module docstring).
 
@@ -153,11 +160,10 @@ class DetectionSequence:
             if (horizon_motion > p.static_min_horizon_motion_px
                     and edge_motion < p.static_max_motion_ratio * horizon_motion):
                 self.recent.append((t_s, result))
-                return not_found(f"refused: the edges' crossing stayed within {edge_motion:.1f} px in the image while the "
-                                 f"horizon moved {horizon_motion:.0f} px away from it: fixed to the camera (the aircraft's "
-                                 "structure? mask it in camera.json, see visland mask), not the runway",
-                                 roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
-                                 image_size=result.image_size, elapsed_s=result.elapsed_s)
+                return _refused(result, f"the edges' crossing stayed within {edge_motion:.1f} px in the image while "
+                                        f"the horizon moved {horizon_motion:.0f} px away from it: fixed to the camera "
+                                        "(the aircraft's structure? mask it in camera.json, see visland mask), not the "
+                                        "runway")
         self.recent.append((t_s, result))
         return result
 
@@ -181,9 +187,7 @@ class DetectionSequence:
             again = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params, previous=self.last_good)
             if again.found and not _identity_mismatch(again, self.camera, k_then, width_then, dt, p):
                 return again
-        return not_found(f"refused: {why} ({result.mode} picked another object parallel to the runway)",
-                         roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
-                         image_size=result.image_size, elapsed_s=result.elapsed_s)
+        return _refused(result, f"{why} ({result.mode} picked another object parallel to the runway)")
 
     def _check_same_object(self, result: DetectionResult, dt: float) -> DetectionResult:
         """Refuse a detection, tracked or not, whose centre line's lateral offset over height
@@ -202,9 +206,7 @@ class DetectionSequence:
         why = _identity_mismatch(result, self.camera, k_then, math.nan, dt, self.params)
         if not why:
             return result
-        return not_found(f"refused: {why} ({result.mode} picked another object parallel to the runway)",
-                         roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
-                         image_size=result.image_size, elapsed_s=result.elapsed_s)
+        return _refused(result, f"{why} ({result.mode} picked another object parallel to the runway)")
 
     def _detect_without_attitude(self, image, prior: DetectionResult | None) -> DetectionResult:
         """The horizon from the frame, moved through the runway's vanishing point when found.
