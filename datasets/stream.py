@@ -214,8 +214,12 @@ class _SharedFrames:
         view = np.ndarray(self.shape, np.uint8, buffer=self.blocks[name].buf)
         rgb = view.copy()
         del view                              # no export left: the block can be closed
-        self._free.append(name)
+        self.release(name)
         return rgb
+
+    def release(self, name: str) -> None:
+        """Block ``name`` is free again (read, or not written: its frame came back whole)."""
+        self._free.append(name)
 
     def __len__(self):
         return len(self._free)
@@ -368,7 +372,10 @@ class RenderedSource(FrameSource):
                     while pending:
                         block, result = pending.popleft()
                         index, rgb = result.get()
-                        rgb = ring.read(block) if rgb is None else rgb
+                        if rgb is None:
+                            rgb = ring.read(block)
+                        else:                               # came back whole: its block was not used
+                            ring.release(block)
                         task = next(todo, None)
                         if task is not None:
                             block = ring.take()

@@ -183,3 +183,21 @@ def test_runs_written_side_by_side_are_the_serial_runs(file_route, tmp_path):
     about = [k for k, line in enumerate(lines) for kind in SOURCES if f"OUT/{kind}" in line and kind == SOURCES[0]]
     after = [k for k, line in enumerate(lines) if f"OUT/{SOURCES[1]}" in line]
     assert about and after and max(about) < min(after)       # every line of the first source, then the second's
+
+
+def test_a_shared_block_whose_frame_came_back_whole_is_free_again():
+    """A worker that returns its frame whole (another shape: the consumer then says so) leaves its
+    block unwritten; the ring must hand it out again, not run dry before the error is reported."""
+    import numpy as np
+    from visland.datasets.stream import _SharedFrames
+    ring = _SharedFrames(2, (4, 5, 3))
+    try:
+        first, second = ring.take(), ring.take()
+        assert len(ring) == 0
+        ring.release(first)
+        assert ring.take() == first
+        np.ndarray((4, 5, 3), np.uint8, buffer=ring.blocks[second].buf)[:] = 7
+        assert (ring.read(second) == 7).all() and len(ring) == 1
+    finally:
+        ring.close()
+    assert ring.blocks == {}
