@@ -32,7 +32,8 @@ from visland.camera import CameraModel
 from visland.detection.candidates import candidate_lines, check_lines, hough_segments
 from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
-from visland.detection.refine import LineFit, NoFit, PixelLine, chroma_boundary, chroma_of, refine_line
+from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of, refine_line,
+                                     sample_profiles)
 from visland.detection.result import DetectionResult, not_found
 from visland.detection.threshold_marking import ground_begins, threshold_marking
 from visland.detection.transverse import find_transverse_line, pavement_beyond_edges, surface_extent
@@ -633,6 +634,10 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     pair, why = _pair_edges(ctx, fits, prediction)
     if pair is None:
         return None, why
+    # (a tracked pair is the pair acquired, its width held to the prediction's by _pair_edges)
+    why = _unbalanced_edges(ctx, pair) if prediction is None else ""
+    if why:
+        return None, why
     notes = [f"{name} edge {fit.note}" for name, fit in fits.items() if fit.note]
     centre_fit, centre_note = _centre_line(ctx, pair, hypothesis.centre_polarity)
     if centre_note:
@@ -757,6 +762,79 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
                      s0_right=s0_right, k_right=k_right, sigma_s0_right_px=sigma_s0_right_px, tolerance_px=tolerance,
                      segment_left_uv=segment_left_uv, segment_right_uv=segment_right_uv, d_far=d_far,
                      d_near=d_near), None
+
+
+#: Profiles sampled across each edge by :func:`_unbalanced_edges`, and the stretch of the edge
+#: they cover (fractions of its supported length: its ends are left out).
+BALANCE_PROFILES = 24
+BALANCE_SPAN = (0.1, 0.9)
+
+
+def _edge_step(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams) -> float:
+    """Median level just outside the edge ``segment_uv`` minus inside it past a side stripe.
+
+    ``other_uv`` is the runway's other edge (the inside lies towards it). Across each of
+    :data:`BALANCE_PROFILES` points of the edge: the mean of the surface between 1 px and a band
+    beyond the edge, minus the mean of the pavement between the side stripe's reach (as in
+    :func:`_refine_edge`: ``side_stripe_width_fraction`` of the local width plus
+    ``edge_blur_px``) and a band past it; the band is 15 % of the local width, 1.5 to 8 px.
+    ``image`` is grey levels or RGB (its chroma is sampled). NaN when nothing is sampled.
+    """
+    segment, other = np.asarray(segment_uv, float), np.asarray(other_uv, float)
+    direction = segment[1] - segment[0]
+    length = float(np.hypot(*direction))
+    other_direction = other[1] - other[0]
+    if length < 1.0 or float(np.hypot(*other_direction)) < 1.0:
+        return math.nan
+    direction /= length
+    other_normal = np.array([-other_direction[1], other_direction[0]]) / float(np.hypot(*other_direction))
+    outward = np.array([-direction[1], direction[0]])
+    if (other.mean(axis=0) - segment.mean(axis=0)) @ outward > 0:
+        outward = -outward
+    points = segment[0] + np.outer(np.linspace(*BALANCE_SPAN, BALANCE_PROFILES) * length, direction)
+    width = np.abs((points - other[0]) @ other_normal)
+    reach = params.side_stripe_width_fraction * width + params.edge_blur_px
+    band = np.clip(0.15 * width, 1.5, 8.0)
+    profiles, offsets = sample_profiles(image, points, outward, direction, float((reach + band).max()) + 3.0)
+    finite = np.isfinite(profiles)
+    outside = (offsets[None, :] >= 1.0) & (offsets[None, :] <= 1.0 + band[:, None]) & finite
+    inside = ((offsets[None, :] <= -(reach[:, None] + 0.5)) & (offsets[None, :] >= -(reach + 0.5 + band)[:, None])
+              & finite)
+    sampled = outside.any(axis=1) & inside.any(axis=1)
+    if not sampled.any():
+        return math.nan
+    level_out = np.where(outside, profiles, 0.0).sum(axis=1) / np.maximum(outside.sum(axis=1), 1)
+    level_in = np.where(inside, profiles, 0.0).sum(axis=1) / np.maximum(inside.sum(axis=1), 1)
+    return float(np.median((level_out - level_in)[sampled]))
+
+
+def _unbalanced_edges(ctx: _Context, pair: _EdgePair) -> str:
+    """Why the two edges cannot be one runway's sides (``""`` when they can): across both, the
+    surface must change the same way (outside minus inside of one sign) and by comparable
+    amounts (``params.edge_balance_*``). A painted line inside a pavement (the centre line seen
+    in fog taken for the left edge) has pavement on both sides; a side stripe taken for a narrow
+    strip has the runway's pavement outside one of its sides and grass outside the other. Grey
+    levels and, in a colour frame, chroma are each asked; a channel whose stronger step is
+    under ``edge_balance_min_levels`` does not decide."""
+    params = ctx.params
+    channels = [("grey", ctx.image)] + ([("chroma", ctx.colour)] if ctx.colour is not None else [])
+    verdicts = []
+    for name, image in channels:
+        left = _edge_step(image, pair.segment_left_uv, pair.segment_right_uv, params)
+        right = _edge_step(image, pair.segment_right_uv, pair.segment_left_uv, params)
+        if not (math.isfinite(left) and math.isfinite(right)):
+            continue
+        strong, weak = max(abs(left), abs(right)), min(abs(left), abs(right))
+        if strong < params.edge_balance_min_levels:
+            continue
+        if left * right > 0 and weak >= params.edge_balance_min_ratio * strong:
+            return ""                   # one deciding channel finds them balanced: enough
+        verdicts.append((name, left, right))
+    if not verdicts:
+        return ""
+    steps = "; ".join(f"{name} {left:+.1f} / {right:+.1f}" for name, left, right in verdicts)
+    return (f"the surface does not change alike across the two edges (steps outside minus inside, left / right: "
+            f"{steps}): not one pavement's two sides")
 
 
 def _centre_line(ctx: _Context, pair: _EdgePair, polarity_hint: int) -> tuple[LineFit | None, str]:

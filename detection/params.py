@@ -493,6 +493,15 @@ class DetectorParams(ParamsFile):
     pair_min_overlap_fraction : float
         The two edges must be seen over a common stretch of depth of at least this fraction of
         the shorter one's (and ``min_edge_length_px``).
+    edge_balance_min_ratio, edge_balance_min_levels : float
+        Both sides of one runway separate its pavement from what lies beside it: the grey-level
+        (or chroma) step across the weaker edge, between the surface just outside it and the
+        pavement inside past a side stripe, must be at least ``edge_balance_min_ratio`` of the
+        step across the stronger one. A painted line inside a pavement (the centre line taken
+        for an edge, seen in fog) has the same surface on both sides. A channel decides only
+        where the stronger step reaches ``edge_balance_min_levels`` levels; the pair is refused
+        when a deciding channel finds the steps unbalanced and no deciding channel finds them
+        balanced.
     vp_line_min_sigma_px : float
         Floor of a line's uncertainty at the horizon when the vanishing point is fused.
     centre_band_fraction, centre_band_min_px, centre_band_max_factor : float
@@ -816,6 +825,8 @@ class DetectorParams(ParamsFile):
     prediction_gate_sigmas: float = 2.5
     edge_crossing_sigmas: float = 3.0
     pair_min_overlap_fraction: float = 0.25
+    edge_balance_min_ratio: float = 0.25
+    edge_balance_min_levels: float = 6.0
     vp_line_min_sigma_px: float = 0.02
     centre_band_fraction: float = 0.08
     centre_band_min_px: float = 3.0
@@ -967,6 +978,7 @@ class DetectorParams(ParamsFile):
         "chroma_retry_extent_fraction": (0.0, 1.0), "chroma_resolved_stripe_px": (0.0, 1000.0),
         "prediction_gate_sigmas": (0.1, 100.0), "edge_crossing_sigmas": (0.1, 100.0),
         "pair_min_overlap_fraction": (0.0, 1.0), "vp_line_min_sigma_px": (0.001, 100.0),
+        "edge_balance_min_ratio": (0.0, 1.0), "edge_balance_min_levels": (0.0, 255.0),
         "centre_band_fraction": (0.0, 1.0), "centre_band_min_px": (0.5, 1000.0),
         "centre_band_max_factor": (1.0, 100.0), "centre_width_fraction": (0.0, 1.0),
         "centre_min_width_px": (0.5, 1000.0), "centre_image_margin_px": (0.0, 1000.0),

@@ -100,3 +100,57 @@ def test_tracking_after_a_miss_does_not_jump_to_the_parallel_taxiway():
         assert errors["edge_px"] < 1.0 and not errors["gross"], (second.reason, errors)
     else:
         assert "another object" in second.reason, second.reason
+
+
+@pytest.mark.slow
+def test_the_centre_line_seen_in_fog_is_not_paired_with_an_edge():
+    """Visibility 2 km, 610 m before the threshold (the study's frame 215): the runway's far half
+    fades into the fog and its dashed centre line, paired with the right edge, was the best pair
+    (both meet the horizon at one point): found, the 'left edge' on the centre line 20 px from the
+    true one, then tracked down to 100 ft (17 gross frames). Across a centre line the pavement is
+    the same on both sides, across an edge it is not: the runway's two edges, or nothing."""
+    from visland.detection import detect_runway
+    [(rgb, state, labels, _)], camera = _study_frames({"visibility_m": 2000.0}, (3000.0, 45.0), [215])
+    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    errors = _errors(result, camera, state, labels)
+    if result.found:
+        assert errors["edge_px"] < 1.0, errors
+    else:
+        assert "surface does not change alike" in result.reason, result.reason
+
+
+def _edge_pair_frame():
+    """A 200 px grey frame: grass (120) with a vertical pavement strip (80) from u = 60 to 140
+    and a bright centre line (200) from u = 98.5 to 101.5, the left edge with a side stripe."""
+    image = np.full((200, 200), 120, np.uint8)
+    image[:, 60:140] = 80
+    image[:, 60:62] = 200                # left side stripe, inside the edge at u = 60
+    image[:, 99:101] = 200               # centre line
+    return image
+
+
+def _balance(image, left_u, right_u):
+    from types import SimpleNamespace
+
+    from visland.detection.detector import _unbalanced_edges
+    from visland.detection.params import DetectorParams
+    segment = lambda u: np.array([[u, 10.0], [u, 190.0]])        # noqa: E731 (far, near ends)
+    ctx = SimpleNamespace(image=image, colour=None, params=DetectorParams())
+    return _unbalanced_edges(ctx, SimpleNamespace(segment_left_uv=segment(left_u), segment_right_uv=segment(right_u)))
+
+
+def test_edges_with_the_same_surface_change_are_one_pavement():
+    """The pavement's two edges (grass outside, pavement inside past the side stripe) change the
+    grey level alike: accepted."""
+    assert _balance(_edge_pair_frame(), 59.5, 139.5) == ""
+
+
+def test_a_centre_line_or_a_side_stripe_is_not_a_runway_edge():
+    """The centre line's outer side paired with the right edge: pavement on both sides of it
+    (step 0 against the edge's +40); the left side stripe's inner side paired with the left edge
+    seen from the other side, a 2 px strip: its two sides change the grey level opposite ways.
+    Both refused, saying why."""
+    image = _edge_pair_frame()
+    why = _balance(image, 98.5, 139.5)
+    assert "does not change alike" in why and "grey +0.0 / +40.0" in why, why
+    assert "does not change alike" in _balance(image, 59.5, 61.5)
