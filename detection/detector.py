@@ -611,6 +611,8 @@ class _TransverseLines:
     threshold_line: tuple
     end_line: tuple
     notes: list
+    threshold_method: str = ""
+    pavement_marking_widths: float = math.nan
 
 
 def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, prediction: Prediction | None = None):
@@ -666,7 +668,8 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         segments_uv=segments, threshold_line=transverse.threshold_line, end_line=transverse.end_line,
         vanishing_point_uv=vp_uv, horizon=ctx.horizon_line, dF_px=dF_px, dpsi_rad=dpsi_rad, roll_rad=ctx.roll,
         pitch_rad=ctx.pitch, mode=mode, roi=tuple(int(a) for a in roi), image_size=(camera.width, camera.height),
-        elapsed_s=time.perf_counter() - ctx.start, notes=tuple(notes)), None
+        elapsed_s=time.perf_counter() - ctx.start, notes=tuple(notes), threshold_method=transverse.threshold_method,
+        pavement_marking_widths=transverse.pavement_marking_widths), None
 
 
 def _extent_image(ctx: _Context, hypothesis: RunwayHypothesis):
@@ -932,6 +935,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
                                window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour,
                                surface_level=surface_level, params=params)
     far_withheld = False
+    marking_widths = math.nan
     if near is not None:
         # a step inside the pavement (a patch's edge, the stripes' inner edge) is not where the
         # runway begins: the ground must begin at the threshold, or the step is searched again
@@ -940,10 +944,13 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         d_pavement, pavement_step, moved = near.depth_px, near.step, None
         ground = ground_begins(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px,
                                min(d_exit, near.depth_px + params.pavement_search_fraction * depth_span
-                                   + params.pavement_search_px), surface_level, min_step, params=params)
+                                   + params.pavement_search_px), surface_level, min_step, colour=ctx.colour,
+                               params=params)
         if ground is not None and ground[0] > near.depth_px + params.pavement_min_move_px:
-            d_ground, pavement_step = ground
+            d_ground, ground_step = ground
             d_pavement = d_ground
+            if math.isfinite(ground_step):              # (NaN: only the chroma told the ground)
+                pavement_step = ground_step
             again = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                          d_ground, (d_ground - params.pavement_window_px,
                                                     min(bottom_depth, d_ground + params.pavement_window_px)), outward=1,
@@ -955,6 +962,8 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         marking = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                     d_pavement, 1.0, min_step, surface_level=surface_level,
                                     pavement_step=pavement_step, params=params)
+        if marking is not None:
+            marking_widths = marking.pavement_widths
         if marking is not None and marking.line is None:
             notes.append(f"threshold withheld: plain pavement, then a marking {marking.pavement_widths:.1f} runway "
                          "widths in, too far to be placed (a displaced threshold?)")
@@ -1008,7 +1017,8 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             if camera.in_image(uv, margin_px=0.0):
                 corners[index] = uv
                 corners_found[index] = True
-    return _TransverseLines(corners, corners_found, threshold_line, end_line, notes)
+    return _TransverseLines(corners, corners_found, threshold_line, end_line, notes,
+                            near.method if near is not None else "", marking_widths)
 
 
 def _confidence(params: DetectorParams, pair: _EdgePair, centre_fit: LineFit | None) -> tuple[float | None, str | None]:

@@ -98,7 +98,7 @@ NOT_SCALED_PX = (
     "pavement_window_px", "pavement_agreement_px",
     # where the ground begins and the threshold marking: depth pixels of resolution and sampling
     # (threshold_marking), kept at their 2048 px values
-    "ground_begin_min_px", "marking_min_resolved_px", "marking_unresolved_min_span_px",
+    "ground_begin_min_px", "ground_begin_chroma_rows_px", "marking_min_resolved_px", "marking_unresolved_min_span_px",
     "marking_unresolved_plain_px",
 )
 
@@ -545,6 +545,9 @@ class DetectorParams(ParamsFile):
     ground_begin_side_band, ground_begin_side_samples : tuple of 2 float, int
         ... differs from the runway's surface level as the median of this many samples between
         these fractions of the width outside each edge does.
+    ground_begin_chroma_rows_px : float
+        With a colour frame the chroma also tells pavement from ground there, the runway's own
+        chroma read over this many pixels of depth just inside the step found.
     marking_min_pavement_widths, marking_max_pavement_widths : float
         A threshold marking (:func:`threshold_marking.threshold_marking`) must begin between these
         many runway widths inside the pavement.
@@ -627,6 +630,10 @@ class DetectorParams(ParamsFile):
         ``threshold_width_tolerance_px + threshold_width_tolerance_fraction * predicted width``
         is not the threshold followed so far (a marking, a joining pavement): its corners are
         withheld.
+    marking_memory_s : float
+        Over a sequence: for this long after a frame saw a threshold marking inside the pavement
+        (a displaced threshold, a blast pad), a threshold placed where the pavement begins is
+        withheld (:class:`visland.detection.DetectionSequence`).
     reference_rate_hz : float
         Frame rate the per-frame limits above are given for.
     reference_side_px : int
@@ -850,6 +857,7 @@ class DetectorParams(ParamsFile):
     ground_begin_middle_samples: int = 15
     ground_begin_side_band: tuple = (0.15, 0.4)
     ground_begin_side_samples: int = 6
+    ground_begin_chroma_rows_px: float = 3.0
     marking_min_pavement_widths: float = 0.8
     marking_max_pavement_widths: float = 12.0
     marking_columns: int = 64
@@ -886,6 +894,7 @@ class DetectorParams(ParamsFile):
     threshold_track_s: float = 2.0
     threshold_width_tolerance_px: float = 2.0
     threshold_width_tolerance_fraction: float = 0.04
+    marking_memory_s: float = 10.0
     reference_rate_hz: float = 25.0
     # --- the reference camera of the pixel lengths
     reference_side_px: int = 2048
@@ -990,7 +999,7 @@ class DetectorParams(ParamsFile):
         "pavement_agreement_px": (0.0, 1000.0),
         "ground_begin_min_px": (0.0, 1000.0), "ground_begin_middle_span": (0.0, 1.0),
         "ground_begin_middle_samples": (3, 1000, "int"), "ground_begin_side_band": (0.0, 10.0),
-        "ground_begin_side_samples": (1, 1000, "int"), "marking_min_pavement_widths": (0.0, 1000.0),
+        "ground_begin_side_samples": (1, 1000, "int"), "ground_begin_chroma_rows_px": (0.5, 1000.0), "marking_min_pavement_widths": (0.0, 1000.0),
         "marking_max_pavement_widths": (0.0, 1000.0), "marking_columns": (8, 10000, "int"),
         "marking_column_span": (0.0, 1.0), "marking_min_resolved_px": (0.0, 1000.0),
         "marking_unresolved_min_span_px": (0.0, 10000.0), "marking_start_fraction": (0.0, 10.0),
@@ -1007,7 +1016,7 @@ class DetectorParams(ParamsFile):
         "static_max_motion_ratio": (0.0, 1.0), "identity_memory_s": (0.0, 600.0), "identity_k_tolerance": (0.0, 100.0), "identity_k_rate": (0.0, 100.0),
         "identity_width_tolerance": (0.0, 100.0), "identity_width_rate": (0.0, 100.0),
         "threshold_width_tolerance_px": (0.0, 1000.0), "threshold_width_tolerance_fraction": (0.0, 10.0),
-        "reference_rate_hz": (0.1, 10000.0),
+        "marking_memory_s": (0.0, 3600.0), "reference_rate_hz": (0.1, 10000.0),
         "reference_side_px": (16, 100000, "int"), "reference_focal_px": (1.0, 1e6),
     }
 

@@ -73,6 +73,15 @@ class DetectionResult:
         Wall time spent in :func:`detect_runway`.
     notes : tuple of str
         Details of what was not found (also summarised in ``reason``).
+    threshold_method : str
+        How the threshold line was placed (:class:`visland.detection.transverse.TransverseLine`
+        ``method``: ``"chroma"``, ``"grey"``, ``"ground-exit"``, ... at the step where the
+        pavement begins; ``"marking-bar"``, ``"marking-stripes"`` on a threshold marking inside
+        the pavement); empty when there is no threshold line.
+    pavement_marking_widths : float
+        Runway widths from the pavement's start to a threshold marking seen inside it (a
+        displaced threshold's bar, stripes after a blast pad), placed or not; NaN when none was
+        seen.
     """
 
     found: bool
@@ -97,6 +106,8 @@ class DetectionResult:
     image_size: tuple = (0, 0)
     elapsed_s: float = 0.0
     notes: tuple = ()
+    threshold_method: str = ""
+    pavement_marking_widths: float = math.nan
 
     @property
     def lines_found(self) -> dict:

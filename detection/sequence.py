@@ -21,6 +21,14 @@ or a pavement joining the runway taken for it) has its corners withheld, and thr
 a row that agree with each other start the track afresh. After ``hold_s`` without a good
 detection the next search starts afresh.
 
+A threshold marking seen inside the pavement (a displaced threshold's bar, the stripes after a
+blast pad: :func:`visland.detection.threshold_marking.threshold_marking`) is fixed on the ground:
+for ``marking_memory_s`` after a frame saw one, a threshold placed where the pavement begins is
+the pavement's start, not the threshold, and its corners are withheld. Far out the marking is a
+line a fraction of a pixel wide that single frames see only now and then (the robustness
+study's displaced threshold from 3.7 to 2.9 km: seen in one frame of three, the others placed
+the threshold at the pavement's start, 9-10 px before the true one).
+
 A re-acquisition after a loss longer than ``hold_s`` is checked against where the runway was
 (for ``identity_memory_s``): its centre line's lateral offset over height and its width over
 height, read off the edges in the horizon frame, must be close to the remembered ones. Every
@@ -85,6 +93,7 @@ class DetectionSequence:
         self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
         self.identity: tuple | None = None                        # (t_s, k_centre, width_ratio) last accepted
         self.recent: list[tuple[float, DetectionResult]] = []     # found, within static_window_s
+        self.marking_seen: tuple | None = None                    # (t_s, widths) marking inside the pavement
 
     def reset(self) -> None:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
@@ -95,6 +104,7 @@ class DetectionSequence:
         self.image_attitude = None
         self.identity = None
         self.recent = []
+        self.marking_seen = None
 
     def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float,
                  predicted: DetectionResult | None = None) -> DetectionResult:
@@ -129,6 +139,8 @@ class DetectionSequence:
             result = self._check_identity(result, image, roll_rad, pitch_rad, float(t_s))
         if result.found and prior is not None and inertial:
             result = self._check_same_object(result, dt)
+        if result.found:
+            result = self._check_pavement_start(result, float(t_s))
         if result.found and prior is not None:
             result = self._check_threshold(result, prior, dt)
         if result.found:
@@ -241,6 +253,20 @@ class DetectionSequence:
                 result = again
         return result
 
+    def _check_pavement_start(self, result: DetectionResult, t_s: float) -> DetectionResult:
+        """Withhold a threshold placed where the pavement begins while a threshold marking was seen
+        inside the pavement within ``marking_memory_s`` (module docstring); remember the marking."""
+        if math.isfinite(result.pavement_marking_widths):
+            self.marking_seen = (t_s, float(result.pavement_marking_widths))
+        if self.marking_seen is None or not result.corners_found[:2].any():
+            return result
+        t_seen, widths = self.marking_seen
+        if t_s - t_seen > self.params.marking_memory_s or result.threshold_method.startswith("marking"):
+            return result
+        return _without_threshold(result, f"threshold withheld: placed where the pavement begins, but a threshold "
+                                          f"marking {widths:.1f} runway widths inside the pavement was seen "
+                                          f"{t_s - t_seen:.1f} s earlier (a displaced threshold?)")
+
     def _check_threshold(self, result: DetectionResult, prior: DetectionResult, dt: float) -> DetectionResult:
         """Drop threshold corners that jumped since the prior (the touchdown-zone bars taken for
         the threshold for one frame); the edges and d_F stay."""
@@ -314,6 +340,16 @@ class DetectionSequence:
             if jump > jump_limit:
                 return f"the vanishing point moved {jump:.0f} px along the horizon (> {jump_limit:.0f})"
         return ""
+
+
+def _without_threshold(result: DetectionResult, note: str) -> DetectionResult:
+    """``result`` with its threshold line and corners withheld, saying ``note``."""
+    corners = result.corners_uv.copy()
+    corners[:2] = np.nan
+    found = result.corners_found.copy()
+    found[:2] = False
+    return replace(result, corners_uv=corners, corners_found=found, threshold_line=(math.nan, math.nan),
+                   reason="; ".join(filter(None, [result.reason, note])), notes=result.notes + (note,))
 
 
 def _ground_geometry(result: DetectionResult, camera: CameraModel):

@@ -37,7 +37,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame, meet_h
 from visland.detection.params import DetectorParams
-from visland.detection.refine import PixelLine, remap_inside
+from visland.detection.refine import PixelLine, chroma_of, remap_inside
 from visland.detection.transverse import TransverseLine, edge_crossings_s, transverse_grid, transverse_line_h
 
 __all__ = ["ThresholdMarking", "threshold_marking", "ground_begins", "STRIPES_FROM_THRESHOLD_WIDTHS"]
@@ -280,7 +280,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
 
 def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine, d_from: float,
                   d_to: float, surface_level: float, min_step: float, step_d_px: float = 0.5,
-                  min_ground_px: float | None = None,
+                  min_ground_px: float | None = None, colour=None,
                   params: DetectorParams | None = None) -> tuple[float, float] | None:
     """Depth where the ground begins before a threshold found at ``d_from``, searching towards the
     camera up to ``d_to``.
@@ -290,11 +290,18 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     40 % of the width outside, ``ground_begin_side_band``):
     a row is pavement while it differs from both sides the way the runway's own surface
     ``surface_level`` does (by half that difference at least; a taxiway joining one side makes
-    that side paved, and the row counts as ground, so nothing moves). Returns the depth of the
+    that side paved, and the row counts as ground, so nothing moves). With ``colour``, a row is
+    also pavement while its chroma differs from both sides' the way the runway's does (read on
+    the rows just inside ``d_from``; only where the ground's chroma differs from it by
+    ``params.transverse_chroma_min_step`` levels): a patch of darker concrete has the grass's grey
+    level but not its colour (the robustness study's patched concrete at 1.25 to 1.07 km: the
+    threshold was kept on a patch's step 9 px inside the runway, the ground "beginning" in grey
+    levels 1.7 px past it). Returns the depth of the
     first ``min_ground_px`` of ground rows (``d_from`` itself when the ground begins at once) and
-    the grey-level step from the ground to the runway's surface (the smaller of the two sides), or
-    None when the frame cannot tell (no clear difference between the runway and the ground beside
-    it, rows outside the image) or the pavement runs to ``d_to``.
+    the grey-level step from the ground to the runway's surface (the smaller of the two sides;
+    NaN when only the chroma tells them apart), or None when the frame cannot tell (no clear
+    difference between the runway and the ground beside it, rows outside the image) or the
+    pavement runs to ``d_to``.
 
     Parameters
     ----------
@@ -319,9 +326,13 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     min_ground_px : float, optional
         Depth (pixels) of consecutive ground rows that counts as the ground beginning
         (``params.ground_begin_min_px`` by default).
+    colour : ndarray of uint8, shape (H, W, 3), optional
+        The colour frame: its chroma (:func:`visland.detection.refine.chroma_of`) also tells
+        pavement from ground.
     params : DetectorParams, optional
         That default and the samples read (``ground_begin_middle_span``,
-        ``ground_begin_side_band``, ``ground_begin_middle_samples``, ``ground_begin_side_samples``);
+        ``ground_begin_side_band``, ``ground_begin_middle_samples``, ``ground_begin_side_samples``,
+        ``ground_begin_chroma_rows_px``), ``transverse_chroma_min_step``;
         ``DetectorParams()`` if omitted.
 
     Returns
@@ -358,9 +369,16 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     for side in beside:
         contrast = surface_level - float(np.median(side[rows_ok]))
         if not abs(contrast) >= min_step:
-            return None
+            pavement, contrasts = None, []         # grey levels cannot tell (the chroma may)
+            break
         pavement &= (middle - side) * math.copysign(1.0, contrast) > 0.5 * abs(contrast)
         contrasts.append(abs(contrast))
+    in_chroma = (_chroma_pavement(colour, horizon, s0, k_centre, line_left, line_right, d_from, step_d_px, depths,
+                                  grid, inside, rows_ok, (n0, n1), params) if colour is not None else None)
+    if in_chroma is not None:
+        pavement = in_chroma if pavement is None else pavement | in_chroma
+    if pavement is None:
+        return None
     ground = rows_ok & ~pavement
     need = max(1, int(round(min_ground_px / step_d_px)))
     run = 0
@@ -369,8 +387,49 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
         if run >= need:
             first = i - need + 1
             depth = float(d_from) if first == 0 else float(depths[first] - 0.5 * step_d_px)
-            return depth, min(contrasts)
+            return depth, min(contrasts) if contrasts else math.nan
         if not rows_ok[i]:
             return None
     return None
+
+
+def _chroma_pavement(colour, horizon: HorizonFrame, s0: float, k_centre: float, line_left, line_right,
+                     d_from: float, step_d_px: float, depths, grid, inside, rows_ok, split: tuple,
+                     params: DetectorParams):
+    """:func:`ground_begins`'s rows (``grid``, the middle's samples then each side's, ``split``)
+    that are pavement in the chroma: the middle's chroma differs from each side's as the
+    runway's does just inside ``d_from`` (the middle's median over ``ground_begin_chroma_rows_px``
+    of depth there), by half that difference at least. None when a side's ground does not differ
+    from the runway by ``transverse_chroma_min_step`` chroma levels (sand, snow, dry grass, a
+    grey camera) or the rows inside are not in the frame."""
+    n0, n1 = split
+    height, width = colour.shape[:2]
+    inner_depths = np.arange(d_from - step_d_px, max(d_from - params.ground_begin_chroma_rows_px, 0.5) - 1e-9,
+                             -step_d_px)
+    if len(inner_depths) < 2:
+        return None
+    _, _, inner_grid, inner_inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, inner_depths,
+                                                     np.linspace(*params.ground_begin_middle_span, n0),
+                                                     colour.shape)
+    if not inner_inside.all():
+        return None
+    points = np.concatenate([grid[inside], inner_grid.reshape(-1, 2)])
+    u0, v0 = (max(0, int(math.floor(points[:, k].min())) - 1) for k in (0, 1))
+    u1, v1 = int(min(width, math.ceil(points[:, 0].max()) + 2)), int(min(height, math.ceil(points[:, 1].max()) + 2))
+    chroma = chroma_of(colour[v0:v1, u0:u1])
+
+    def read(samples, ok):
+        shifted = samples - np.array([u0, v0], float)
+        return remap_inside(chroma, shifted[..., 0].astype(np.float32), shifted[..., 1].astype(np.float32), ok)
+
+    surface = float(np.median(read(inner_grid, inner_inside)))
+    values = read(grid, inside)
+    middle = np.median(values[:, :n0], axis=1)
+    pavement = rows_ok.copy()
+    for side in (np.median(values[:, n0:n1], axis=1), np.median(values[:, n1:], axis=1)):
+        contrast = float(np.median(side[rows_ok])) - surface
+        if not abs(contrast) >= params.transverse_chroma_min_step:
+            return None
+        pavement &= (side - middle) * math.copysign(1.0, contrast) > 0.5 * abs(contrast)
+    return pavement
 
