@@ -942,11 +942,22 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         # where it does; then, if the pavement precedes a threshold marking (displaced
         # threshold, blast pad), the threshold is that marking
         d_pavement, pavement_step, moved = near.depth_px, near.step, None
+        reach = params.pavement_search_fraction * depth_span + params.pavement_search_px
         ground = ground_begins(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px,
-                               min(d_exit, near.depth_px + params.pavement_search_fraction * depth_span
-                                   + params.pavement_search_px), surface_level, min_step, colour=ctx.colour,
+                               min(d_exit, near.depth_px + reach), surface_level, min_step, colour=ctx.colour,
                                params=params)
-        if ground is not None and ground[0] > near.depth_px + params.pavement_min_move_px:
+        if ground is not None and math.isinf(ground[0]):
+            # pavement all the way searched: a step inside the runway (the near edge of its
+            # touchdown zone's rubber when the edges' support ends there, concrete on dry grass
+            # at 1.5 km: 16 px short); the ground is looked for as far again
+            ground = ground_begins(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px,
+                                   min(d_exit, near.depth_px + params.pavement_search_extend * reach), surface_level,
+                                   min_step, colour=ctx.colour, params=params)
+        runs_on = ground is not None and math.isinf(ground[0])
+        if runs_on:
+            notes.append("threshold withheld: the pavement continues past the step found as far as searched")
+            near = None
+        elif ground is not None and ground[0] > near.depth_px + params.pavement_min_move_px:
             d_ground, ground_step = ground
             d_pavement = d_ground
             if math.isfinite(ground_step):              # (NaN: only the chroma told the ground)
@@ -959,9 +970,10 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
                      and abs(again.depth_px - d_ground) <= params.pavement_agreement_px else False)
             if moved:
                 d_pavement, pavement_step = moved.depth_px, moved.step
-        marking = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
-                                    d_pavement, 1.0, min_step, surface_level=surface_level,
-                                    pavement_step=pavement_step, params=params)
+        marking = None if runs_on else threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line,
+                                                         fits["right"].line, d_pavement, 1.0, min_step,
+                                                         surface_level=surface_level, pavement_step=pavement_step,
+                                                         params=params)
         if marking is not None:
             marking_widths = marking.pavement_widths
         if marking is not None and marking.line is None:

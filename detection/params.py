@@ -530,6 +530,9 @@ class DetectorParams(ParamsFile):
     pavement_search_fraction, pavement_search_px : float
         Where the ground begins before a threshold found is searched this fraction of the edges'
         depth span plus this many pixels towards the camera.
+    pavement_search_extend : float
+        When the pavement runs on over all of that, it is searched again this many times as far;
+        still pavement there, the step found is inside the runway and the threshold is withheld.
     pavement_min_move_px : float
         The threshold moves to where the ground begins when that is more than this depth past
         the step found.
@@ -630,10 +633,11 @@ class DetectorParams(ParamsFile):
         ``threshold_width_tolerance_px + threshold_width_tolerance_fraction * predicted width``
         is not the threshold followed so far (a marking, a joining pavement): its corners are
         withheld.
-    marking_memory_s : float
-        Over a sequence: for this long after a frame saw a threshold marking inside the pavement
-        (a displaced threshold, a blast pad), a threshold placed where the pavement begins is
-        withheld (:class:`visland.detection.DetectionSequence`).
+    marking_memory_s, marking_memory_agreement : float
+        Over a sequence: while two frames of the last ``marking_memory_s`` seconds saw a
+        threshold marking inside the pavement (a displaced threshold, a blast pad) the same
+        number of runway widths in (within this fraction), a threshold placed where the
+        pavement begins is withheld (:class:`visland.detection.DetectionSequence`).
     reference_rate_hz : float
         Frame rate the per-frame limits above are given for.
     reference_side_px : int
@@ -849,6 +853,7 @@ class DetectorParams(ParamsFile):
     threshold_exit_margin_px: float = 2.0
     pavement_search_fraction: float = 0.5
     pavement_search_px: float = 8.0
+    pavement_search_extend: float = 3.0
     pavement_min_move_px: float = 3.0
     pavement_window_px: float = 3.0
     pavement_agreement_px: float = 2.0
@@ -895,6 +900,7 @@ class DetectorParams(ParamsFile):
     threshold_width_tolerance_px: float = 2.0
     threshold_width_tolerance_fraction: float = 0.04
     marking_memory_s: float = 10.0
+    marking_memory_agreement: float = 0.25
     reference_rate_hz: float = 25.0
     # --- the reference camera of the pixel lengths
     reference_side_px: int = 2048
@@ -994,7 +1000,7 @@ class DetectorParams(ParamsFile):
         "centre_min_support": (0.0, 1.0), "centre_bright_support": (0.0, 1.0),
         "threshold_window_min_px": (0.0, 10000.0), "threshold_window_depth_fraction": (0.0, 10.0),
         "border_clearance_px": (0.0, 1000.0), "threshold_exit_margin_px": (0.0, 1000.0),
-        "pavement_search_fraction": (0.0, 10.0), "pavement_search_px": (0.0, 10000.0),
+        "pavement_search_fraction": (0.0, 10.0), "pavement_search_px": (0.0, 10000.0), "pavement_search_extend": (1.0, 100.0),
         "pavement_min_move_px": (0.0, 1000.0), "pavement_window_px": (0.5, 1000.0),
         "pavement_agreement_px": (0.0, 1000.0),
         "ground_begin_min_px": (0.0, 1000.0), "ground_begin_middle_span": (0.0, 1.0),
@@ -1016,7 +1022,7 @@ class DetectorParams(ParamsFile):
         "static_max_motion_ratio": (0.0, 1.0), "identity_memory_s": (0.0, 600.0), "identity_k_tolerance": (0.0, 100.0), "identity_k_rate": (0.0, 100.0),
         "identity_width_tolerance": (0.0, 100.0), "identity_width_rate": (0.0, 100.0),
         "threshold_width_tolerance_px": (0.0, 1000.0), "threshold_width_tolerance_fraction": (0.0, 10.0),
-        "marking_memory_s": (0.0, 3600.0), "reference_rate_hz": (0.1, 10000.0),
+        "marking_memory_s": (0.0, 3600.0), "marking_memory_agreement": (0.0, 10.0), "reference_rate_hz": (0.1, 10000.0),
         "reference_side_px": (16, 100000, "int"), "reference_focal_px": (1.0, 1e6),
     }
 

@@ -23,8 +23,9 @@ detection the next search starts afresh.
 
 A threshold marking seen inside the pavement (a displaced threshold's bar, the stripes after a
 blast pad: :func:`visland.detection.threshold_marking.threshold_marking`) is fixed on the ground:
-for ``marking_memory_s`` after a frame saw one, a threshold placed where the pavement begins is
-the pavement's start, not the threshold, and its corners are withheld. Far out the marking is a
+once two frames within ``marking_memory_s`` saw one at the same place (runway widths inside the
+pavement within ``marking_memory_agreement`` of each other), a threshold placed where the
+pavement begins is the pavement's start, not the threshold, and its corners are withheld. Far out the marking is a
 line a fraction of a pixel wide that single frames see only now and then (the robustness
 study's displaced threshold from 3.7 to 2.9 km: seen in one frame of three, the others placed
 the threshold at the pavement's start, 9-10 px before the true one).
@@ -93,7 +94,7 @@ class DetectionSequence:
         self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
         self.identity: tuple | None = None                        # (t_s, k_centre, width_ratio) last accepted
         self.recent: list[tuple[float, DetectionResult]] = []     # found, within static_window_s
-        self.marking_seen: tuple | None = None                    # (t_s, widths) marking inside the pavement
+        self.markings_seen: list[tuple[float, float]] = []        # (t_s, widths): markings inside the pavement
 
     def reset(self) -> None:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
@@ -104,7 +105,7 @@ class DetectionSequence:
         self.image_attitude = None
         self.identity = None
         self.recent = []
-        self.marking_seen = None
+        self.markings_seen = []
 
     def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float,
                  predicted: DetectionResult | None = None) -> DetectionResult:
@@ -256,16 +257,23 @@ class DetectionSequence:
     def _check_pavement_start(self, result: DetectionResult, t_s: float) -> DetectionResult:
         """Withhold a threshold placed where the pavement begins while a threshold marking was seen
         inside the pavement within ``marking_memory_s`` (module docstring); remember the marking."""
+        p = self.params
+        seen = [(t, w) for t, w in self.markings_seen if t_s - t <= p.marking_memory_s]
         if math.isfinite(result.pavement_marking_widths):
-            self.marking_seen = (t_s, float(result.pavement_marking_widths))
-        if self.marking_seen is None or not result.corners_found[:2].any():
+            seen.append((t_s, float(result.pavement_marking_widths)))
+        self.markings_seen = seen
+        if not result.corners_found[:2].any() or result.threshold_method.startswith("marking"):
             return result
-        t_seen, widths = self.marking_seen
-        if t_s - t_seen > self.params.marking_memory_s or result.threshold_method.startswith("marking"):
-            return result
-        return _without_threshold(result, f"threshold withheld: placed where the pavement begins, but a threshold "
-                                          f"marking {widths:.1f} runway widths inside the pavement was seen "
-                                          f"{t_s - t_seen:.1f} s earlier (a displaced threshold?)")
+        # the same marking seen twice (a single sighting can be the threshold's own stripes
+        # behind a band of ground taken for pavement: concrete on dry grass at 650 m)
+        for t_late, widths in reversed(seen):
+            agreeing = [t for t, w in seen if t != t_late and abs(w - widths) <= p.marking_memory_agreement * widths]
+            if agreeing:
+                return _without_threshold(result, f"threshold withheld: placed where the pavement begins, but a "
+                                                  f"threshold marking {widths:.1f} runway widths inside the pavement "
+                                                  f"was seen {t_s - t_late:.1f} and {t_s - max(agreeing):.1f} s "
+                                                  "earlier (a displaced threshold?)")
+        return result
 
     def _check_threshold(self, result: DetectionResult, prior: DetectionResult, dt: float) -> DetectionResult:
         """Drop threshold corners that jumped since the prior (the touchdown-zone bars taken for

@@ -299,9 +299,9 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     levels 1.7 px past it). Returns the depth of the
     first ``min_ground_px`` of ground rows (``d_from`` itself when the ground begins at once) and
     the grey-level step from the ground to the runway's surface (the smaller of the two sides;
-    NaN when only the chroma tells them apart), or None when the frame cannot tell (no clear
-    difference between the runway and the ground beside it, rows outside the image) or the
-    pavement runs to ``d_to``.
+    NaN when only the chroma tells them apart); ``(inf, step)`` when no ground has begun by
+    ``d_to`` (the rows all in the frame); None when the frame cannot tell (no clear difference between the
+    runway and the ground beside it, rows outside the image).
 
     Parameters
     ----------
@@ -338,7 +338,7 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     Returns
     -------
     tuple of 2 float or None
-        ``(depth_px, step)`` as above, or None.
+        ``(depth_px, step)`` as above (``depth_px`` inf: pavement as far as searched), or None.
     """
     params = params or DetectorParams()
     min_ground_px = params.ground_begin_min_px if min_ground_px is None else min_ground_px
@@ -390,7 +390,7 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
             return depth, min(contrasts) if contrasts else math.nan
         if not rows_ok[i]:
             return None
-    return None
+    return math.inf, min(contrasts) if contrasts else math.nan
 
 
 def _chroma_pavement(colour, horizon: HorizonFrame, s0: float, k_centre: float, line_left, line_right,
