@@ -2,9 +2,9 @@
 ``campaign`` and ``demo`` (light: every heavy import happens inside the command)."""
 from __future__ import annotations
 
-OBSERVER_HELP = ("observer names (two points: oj-2p ii-2p cccs-2p ccpi-hg-2p ccpi-hosm-2p cccj-2p kf-2p; "
-                 "two lines: oj-2l ii-2l ccpi-2l cccj-2l ekf-2l; ECC'15: ecc-hg ecc-hosm) or 'points', "
-                 "'lines', 'ecc', 'all' (default all)")
+from visland.estimation.cli import OBSERVER_HELP as _NAMES     # light: no heavy imports there
+
+OBSERVER_HELP = f"observer names ({_NAMES}; default all)"
 
 
 def _observers(names):

@@ -114,3 +114,16 @@ def test_registry_names_are_the_spec_names():
         cls = observer_class(name)
         assert cls.name == name and cls.features == observer_features(name)
         assert cls.__doc__ and cls.params_type.__doc__
+
+
+def test_every_command_taking_observers_lists_every_registered_one():
+    """estimate, process and campaign print the same observer list, and it names every observer
+    the registry knows (campaign's help once lacked dickmanns-4d: a second copy of the list)."""
+    import re
+
+    from visland.datasets.cli import OBSERVER_HELP as datasets_help
+    from visland.estimation.cli import OBSERVER_HELP
+    from visland.estimation.registry import OBSERVER_NAMES
+    listed = set(re.findall(r"[a-z]+(?:-[a-z0-9]+)+", OBSERVER_HELP))
+    assert set(OBSERVER_NAMES) <= listed, set(OBSERVER_NAMES) - listed
+    assert OBSERVER_HELP in datasets_help
