@@ -48,6 +48,7 @@ class FilterWindows:
     def __init__(self, source, dh0_of_frame, self_calibration: str = "off"):
         from visland.estimation.dickmanns import Dickmanns4D
         from visland.estimation.inputs import InertialSeries
+        from visland.estimation.registry import params_for_camera
         if source.telemetry is None:
             raise ValueError(f"{source.name}: --windows dickmanns-4d needs telemetry")
         self.camera = source.camera
@@ -55,7 +56,7 @@ class FilterWindows:
         self.inertial = InertialSeries.from_table(source.telemetry)
         self.dh0_of_frame = dh0_of_frame
         self.self_calibration = self_calibration
-        self.observer = Dickmanns4D()
+        self.observer = Dickmanns4D(params_for_camera("dickmanns-4d", 0.5 * (self.camera.fx + self.camera.fy)))
         self.started = False
         self.rows: list[dict] = []
         self.n_predicted = 0

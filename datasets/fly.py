@@ -361,9 +361,9 @@ def _depth_flow_px(inp, dh_m, fx_px, dt_s) -> float:
 class _Tracked:
     """An observer run step by step, with its latest deviations."""
 
-    def __init__(self, name, aim_m, fx_px=1.0):
-        from visland.estimation.registry import make_observer
-        self.observer = make_observer(name)
+    def __init__(self, name, aim_m, fx_px):
+        from visland.estimation.registry import make_observer, params_for_camera
+        self.observer = make_observer(name, params_for_camera(name, fx_px))
         self.aim_m = aim_m
         self.started = False
         self.last_correction_s = math.nan

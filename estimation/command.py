@@ -24,7 +24,7 @@ import numpy as np
 
 from visland.contracts import ESTIMATE_EXTRA_COLUMNS, json_ready
 from visland.estimation.deviations import DEFAULT_AIM_DISTANCE_M
-from visland.estimation.registry import make_observer, observer_class, observer_features
+from visland.estimation.registry import make_observer, observer_class, observer_features, params_for_camera
 from visland.userfiles import read_json_object, read_toml_object
 
 __all__ = ["EstimateOptions", "estimate_folder", "load_observer_params", "ESTIMATE_EXTRA_COLUMNS"]
@@ -228,7 +228,9 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_
             dh0 = (1.0 + options.initial_error) * dh_true[frame]
         else:
             raise ValueError("no truth.csv in the folder: give the initial height guess with --initial-height M")
-        run = run_observer(make_observer(name, params.get(name)), prepared, dh0, options.aim_distance_m)
+        # image noise given in pixels means pixels of this camera (registry.params_for_camera)
+        chosen = params_for_camera(name, 0.5 * (camera.fx + camera.fy), params.get(name))
+        run = run_observer(make_observer(name, chosen), prepared, dh0, options.aim_distance_m)
         for f in range(len(run)):
             columns["observer"].append(name)
             columns["t_s"].append(run.t_s[f])

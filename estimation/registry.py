@@ -9,10 +9,11 @@ ccpi-2l cccj-2l ekf-2l (:mod:`visland.estimation.lines`); the ECC'15 system: ecc
 from __future__ import annotations
 
 import importlib
+import math
 
 from visland.estimation.base import Observer
 
-__all__ = ["OBSERVERS", "OBSERVER_NAMES", "POINT_OBSERVERS", "LINE_OBSERVERS", "ECC_OBSERVERS", "DICKMANNS_OBSERVERS",
+__all__ = ["OBSERVERS", "OBSERVER_NAMES", "POINT_OBSERVERS", "LINE_OBSERVERS", "ECC_OBSERVERS", "DICKMANNS_OBSERVERS", "PIXEL_ANGLE_FIELDS", "params_for_camera",
            "observer_class", "make_observer", "observer_features"]
 
 #: name -> (module, class, features)
@@ -89,6 +90,46 @@ def observer_class(name: str) -> type:
     if not (isinstance(cls, type) and issubclass(cls, Observer)):
         raise ValueError(f"observer '{name}': {module_name}.{class_name} is not an Observer")
     return cls
+
+
+#: Parameter fields given as an image angle whose default is a number of the SPEC camera's pixels
+#: (1 px = 1 / DEFAULT_FOCAL_PX rad): on another camera the same number of *its* pixels is meant.
+PIXEL_ANGLE_FIELDS = ("image_sigma_rad", "noise_sigma_rad")
+
+
+def params_for_camera(name: str, fx_px: float, params=None):
+    """``params`` of observer ``name`` with every pixel-angle field (:data:`PIXEL_ANGLE_FIELDS`)
+    the caller did not set scaled from the SPEC camera's pixel to a pixel of focal ``fx_px``.
+
+    kf-2p's and dickmanns-4d's image noise defaults to one pixel of the SPEC camera (1/2472 rad);
+    on a 512 px camera (fx 618 px) a detected corner's pixel of noise is four times that angle,
+    and a filter told a quarter of it trusts its corners four times too much.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`OBSERVER_NAMES`.
+    fx_px : float
+        Focal length of the camera the measurements come from, pixels.
+    params : dict or dataclass, optional
+        The caller's parameters: a dataclass is returned as it is (every field chosen), a dict
+        keeps the fields it sets.
+
+    Returns
+    -------
+    dict or dataclass
+    """
+    from visland.camera import DEFAULT_FOCAL_PX
+    if params is not None and not isinstance(params, dict):
+        return params
+    if not (math.isfinite(fx_px) and fx_px > 0):
+        raise ValueError(f"fx_px must be a positive focal length in pixels, got {fx_px!r}")
+    chosen = dict(params or {})
+    defaults = observer_class(name).params_type()
+    for field in PIXEL_ANGLE_FIELDS:
+        if field not in chosen and hasattr(defaults, field):
+            chosen[field] = getattr(defaults, field) * DEFAULT_FOCAL_PX / fx_px
+    return chosen
 
 
 def make_observer(name: str, params=None) -> Observer:

@@ -234,7 +234,7 @@ def test_a_lagging_observer_is_read_on_its_last_measured_corners_moved_as_it_pre
             self.t_s, self.points_yv = t, yv
 
     measured = np.array([[-20.3, -0.10], [-20.3, 0.14]])
-    tracked = _Tracked("kf-2p", 320.0)
+    tracked = _Tracked("kf-2p", 320.0, 2472.0)
     tracked.observer = _Observer()
     tracked.step(_Inp(0.0, measured), 100.0)
     tracked.step(_Inp(0.02, measured), 100.0)                    # a frame: read on the measured corners

@@ -127,3 +127,24 @@ def test_every_command_taking_observers_lists_every_registered_one():
     listed = set(re.findall(r"[a-z]+(?:-[a-z0-9]+)+", OBSERVER_HELP))
     assert set(OBSERVER_NAMES) <= listed, set(OBSERVER_NAMES) - listed
     assert OBSERVER_HELP in datasets_help
+
+
+def test_image_noise_in_pixels_means_pixels_of_the_camera_used():
+    """kf-2p's and dickmanns-4d's image noise defaults to one pixel of the SPEC camera (fx 2472);
+    on a 512 px camera (fx 618) one of its pixels is four times the angle. A value the user sets
+    is kept, a whole parameter object is taken as it is, and observers without such a field are
+    untouched."""
+    import pytest
+
+    from visland.estimation.kalman import KFParams
+    from visland.estimation.registry import params_for_camera
+    assert params_for_camera("kf-2p", 2472.0)["image_sigma_rad"] == pytest.approx(1.0 / 2472.0)
+    assert params_for_camera("kf-2p", 618.0)["image_sigma_rad"] == pytest.approx(4.0 / 2472.0)
+    assert params_for_camera("dickmanns-4d", 618.0)["image_sigma_rad"] == pytest.approx(4.0 / 2472.0)
+    assert params_for_camera("kf-2p", 618.0, {"image_sigma_rad": 1e-3}) == {"image_sigma_rad": 1e-3}
+    given = KFParams(image_sigma_rad=2e-4)
+    assert params_for_camera("kf-2p", 618.0, given) is given
+    assert params_for_camera("cccs-2p", 618.0)["noise_sigma_rad"] == 0.0       # 0 by default: stays 0
+    assert params_for_camera("ekf-2l", 618.0) == {}
+    with pytest.raises(ValueError, match="fx_px"):
+        params_for_camera("kf-2p", 0.0)
