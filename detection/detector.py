@@ -43,7 +43,7 @@ from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point
 from visland.folder import as_grey, ignored_pixels, scene_frame
 from visland.runway import CORNER_NAMES
 
-__all__ = ["detect_runway", "check_frame"]
+__all__ = ["detect_runway", "check_frame", "block_grid_ratio"]
 
 
 def check_frame(image, camera: CameraModel) -> str | None:
@@ -177,6 +177,15 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     spread = _percentile_spread(sample, *params.contrast_percentiles) if sample.size else 0.0
     if spread < params.min_contrast:
         return fail(f"frame has no contrast below the horizon (grey levels within {spread:.0f})")
+    if block_grid_ratio(image, ground, params.block_grid_px, params.block_sample_rows) >= params.block_grid_min_ratio:
+        # a coarsely compressed frame: its edges are staircases of blocks (edge points off by up
+        # to half a block, a straight line's residuals a saw-tooth of 1-2 px RMS); smoothed, the
+        # staircase is partly averaged out, and what is left is not taken for a bent line
+        params = params.for_block_grid()
+        if params.deblock_sigma_px > 0:
+            image = cv2.GaussianBlur(image, (0, 0), params.deblock_sigma_px)
+            if colour is not None:
+                colour = cv2.GaussianBlur(colour, (0, 0), params.deblock_sigma_px)
 
     context = _Context(image, camera, horizon, params, roll, pitch, start, colour)
     try:
@@ -188,6 +197,47 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     if result is None:
         return fail(why)
     return _withhold_hidden_corners(result, camera)
+
+
+def _sample_rows(ground, rows: int) -> np.ndarray:
+    """``rows`` row indices spread evenly over the ground box, one pixel inside it."""
+    u0, v0, u1, v1 = (int(a) for a in ground)
+    return np.unique(np.linspace(v0 + 1, v1 - 2, max(1, int(rows))).round().astype(int))
+
+
+def block_grid_ratio(image: np.ndarray, ground, block_px: int = 8, rows: int = 32) -> float:
+    """How much a grey frame steps across a compression block grid: the mean absolute step
+    between neighbouring columns across the grid's lines (``u + 1`` a multiple of ``block_px``)
+    over the mean step elsewhere, on ``rows`` rows of the ground box.
+
+    About 1 for a frame that was not block-compressed (or only lightly); about 3 for a JPEG of
+    quality 40-50, whose 8 x 8 blocks each keep a few coefficients: the grid is then visible,
+    and straight edges become staircases of blocks (edge points up to half a block off).
+
+    Parameters
+    ----------
+    image : ndarray (H, W) uint8
+        The grey frame.
+    ground : tuple of 4 int
+        ``(u0, v0, u1, v1)``: the ground's bounding box, end exclusive.
+    block_px : int, optional
+        The block's side (pixels), the grid aligned with pixel (0, 0).
+    rows : int, optional
+        Rows read, spread evenly over the box.
+
+    Returns
+    -------
+    float
+        The ratio; NaN when the box holds fewer than two blocks across or is flat.
+    """
+    u0, v0, u1, v1 = (int(a) for a in ground)
+    if u1 - u0 < 2 * block_px or v1 - v0 < 3:
+        return math.nan
+    levels = image[_sample_rows(ground, rows), u0:u1].astype(np.int16)
+    steps = np.abs(np.diff(levels, axis=1))
+    across = (np.arange(u0, u1 - 1) + 1) % block_px == 0
+    inside = float(steps[:, ~across].mean())
+    return float(steps[:, across].mean()) / inside if inside > 0 else math.nan
 
 
 def _percentile_spread(levels: np.ndarray, q_low: float, q_high: float) -> float:

@@ -89,6 +89,8 @@ NOT_SCALED_PX = (
     # the measurement's sub-pixel floors, blur and resolution limits (detector)
     "edge_band_min_px", "edge_image_margin_px", "edge_blur_px", "chroma_resolved_stripe_px", "vp_line_min_sigma_px",
     "centre_band_min_px", "centre_min_width_px", "confidence_residual_px",
+    # a compressed frame's block grid and its smoothing: pixels of the codec, whatever the frame
+    "block_grid_px", "deblock_sigma_px",
     # depth margins of the measurement (detector) kept at their 2048 px values at every size:
     # scaled with the frame they did worse at 1024 px (benchmarks/detection_robustness.py --size
     # 1024: 69.3 % found, 7 gross against 70.0 %, 6 gross; raycast_approach.py --size 1024 --fps 1
@@ -421,6 +423,24 @@ class DetectorParams(ParamsFile):
         Largest RMS distance of the inlying edge points to a refined line.
     min_contrast : float
         Smallest grey-level step accepted as an edge or stripe.
+    block_sample_rows : int
+        The frame's compression block grid is looked for on this many rows of its ground.
+    block_grid_px : int
+        Side of a compression block (JPEG, MPEG: 8 px, aligned with the frame's top-left pixel).
+    block_grid_min_ratio : float
+        A frame whose mean absolute grey-level step across the block grid's columns is at
+        least this many times the mean step elsewhere (on those rows) was compressed coarsely
+        (:func:`visland.detection.detector.block_grid_ratio`): a JPEG of quality 40-50 reads
+        2.9-3.3, the raw frame and a JPEG of quality 95 about 1, the key frames of the
+        recordings' H.264 videos (512 px) 1.5-1.7 and their other frames 0.9-1.3. Each block
+        keeps a few coefficients, so a straight edge becomes a staircase of blocks: its points
+        are off by up to half a block, evenly spread, a standard deviation of ``block_grid_px /
+        sqrt(12)`` (2.3 px for 8 px blocks). On such a frame ``confidence_residual_px`` and
+        ``max_line_residual_px`` are at least that (:meth:`for_block_grid`): a straight edge's
+        staircase is not taken for a bent line.
+    deblock_sigma_px : float
+        Such a frame is also smoothed by a Gaussian of this sigma (pixels) before the search,
+        which averages the staircase out along the edges (0: not smoothed).
     roi_margin_px : float
         Margin added around the predicted runway in tracking mode.
     roi_margin_fraction : float
@@ -806,6 +826,10 @@ class DetectorParams(ParamsFile):
     min_edge_support: float = 0.45
     max_line_residual_px: float = 1.5
     min_contrast: float = 6.0
+    block_sample_rows: int = 32
+    block_grid_px: int = 8
+    block_grid_min_ratio: float = 2.0
+    deblock_sigma_px: float = 1.5
     # --- tracking, the measurement and its confidence (detector)
     roi_margin_px: float = 40.0
     roi_margin_fraction: float = 0.15
@@ -980,6 +1004,8 @@ class DetectorParams(ParamsFile):
         "boundary_stripe_shift_px": (0.0, 10.0), "boundary_stripe_resolved_px": (0.0, 100.0),
         "boundary_stripe_shift_scale_px": (0.01, 100.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
         "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
+        "block_sample_rows": (1, 4096, "int"), "block_grid_px": (2, 64, "int"),
+        "block_grid_min_ratio": (1.0, 100.0), "deblock_sigma_px": (0.0, 10.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
         "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "min_confidence": (0.0, 1.0),
@@ -1057,6 +1083,23 @@ class DetectorParams(ParamsFile):
         return int(value) if integer else float(value)
 
     # ----------------------------------------------------------------- variants
+    def for_block_grid(self) -> "DetectorParams":
+        """The same detector for a coarsely compressed frame (:attr:`block_grid_min_ratio`): the
+        residuals a straight edge is allowed, ``confidence_residual_px`` and
+        ``max_line_residual_px``, at least the scatter of its points over a block's staircase,
+        ``block_grid_px / sqrt(12)``.
+
+        Returns
+        -------
+        DetectorParams
+            ``self`` when both already allow it, else a copy.
+        """
+        staircase_px = self.block_grid_px / math.sqrt(12.0)
+        if self.confidence_residual_px >= staircase_px and self.max_line_residual_px >= staircase_px:
+            return self
+        return replace(self, confidence_residual_px=max(self.confidence_residual_px, staircase_px),
+                       max_line_residual_px=max(self.max_line_residual_px, staircase_px))
+
     def scaled_to(self, frame) -> "DetectorParams":
         """The same detector for another frame: lengths in pixels scale (module docstring), counts,
         ratios and grey levels do not.
