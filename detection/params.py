@@ -658,6 +658,12 @@ class DetectorParams(ParamsFile):
         threshold marking inside the pavement (a displaced threshold, a blast pad) the same
         number of runway widths in (within this fraction), a threshold placed where the
         pavement begins is withheld (:class:`visland.detection.DetectionSequence`).
+    marking_memory_min_widths : float
+        ... a marking at least this many runway widths in: nearer, it can be the threshold's own
+        marking (stripes from 6 to 36 m in, the designation to about 60 m: 1.3 widths of a 45 m
+        runway) seen behind a band of ground taken for pavement. On visland's 512 px thesis-3
+        approach a dark band of grass before the threshold did that from 700 to 450 m: sightings
+        1.0-1.3 widths in, and 10 thresholds within 0.1-1.2 px of the truth withheld.
     reference_rate_hz : float
         Frame rate the per-frame limits above are given for.
     reference_side_px : int
@@ -925,6 +931,7 @@ class DetectorParams(ParamsFile):
     threshold_width_tolerance_fraction: float = 0.04
     marking_memory_s: float = 10.0
     marking_memory_agreement: float = 0.25
+    marking_memory_min_widths: float = 2.0
     reference_rate_hz: float = 25.0
     # --- the reference camera of the pixel lengths
     reference_side_px: int = 2048
@@ -1048,7 +1055,8 @@ class DetectorParams(ParamsFile):
         "static_max_motion_ratio": (0.0, 1.0), "identity_memory_s": (0.0, 600.0), "identity_k_tolerance": (0.0, 100.0), "identity_k_rate": (0.0, 100.0),
         "identity_width_tolerance": (0.0, 100.0), "identity_width_rate": (0.0, 100.0),
         "threshold_width_tolerance_px": (0.0, 1000.0), "threshold_width_tolerance_fraction": (0.0, 10.0),
-        "marking_memory_s": (0.0, 3600.0), "marking_memory_agreement": (0.0, 10.0), "reference_rate_hz": (0.1, 10000.0),
+        "marking_memory_s": (0.0, 3600.0), "marking_memory_agreement": (0.0, 10.0),
+        "marking_memory_min_widths": (0.0, 1000.0), "reference_rate_hz": (0.1, 10000.0),
         "reference_side_px": (16, 100000, "int"), "reference_focal_px": (1.0, 1e6),
     }
 

@@ -25,7 +25,9 @@ A threshold marking seen inside the pavement (a displaced threshold's bar, the s
 blast pad: :func:`visland.detection.threshold_marking.threshold_marking`) is fixed on the ground:
 once two frames within ``marking_memory_s`` saw one at the same place (runway widths inside the
 pavement within ``marking_memory_agreement`` of each other), a threshold placed where the
-pavement begins is the pavement's start, not the threshold, and its corners are withheld. Far out the marking is a
+pavement begins is the pavement's start, not the threshold, and its corners are withheld (a
+marking fewer than ``marking_memory_min_widths`` in can be the threshold's own, seen behind a
+band of ground taken for pavement, and is not remembered). Far out the marking is a
 line a fraction of a pixel wide that single frames see only now and then (the robustness
 study's displaced threshold from 3.7 to 2.9 km: seen in one frame of three, the others placed
 the threshold at the pavement's start, 9-10 px before the true one).
@@ -259,7 +261,7 @@ class DetectionSequence:
         inside the pavement within ``marking_memory_s`` (module docstring); remember the marking."""
         p = self.params
         seen = [(t, w) for t, w in self.markings_seen if t_s - t <= p.marking_memory_s]
-        if math.isfinite(result.pavement_marking_widths):
+        if result.pavement_marking_widths >= p.marking_memory_min_widths:       # NaN: none seen
             seen.append((t_s, float(result.pavement_marking_widths)))
         self.markings_seen = seen
         if not result.corners_found[:2].any() or result.threshold_method.startswith("marking"):
