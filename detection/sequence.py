@@ -257,8 +257,9 @@ class DetectionSequence:
         return result
 
     def _check_pavement_start(self, result: DetectionResult, t_s: float) -> DetectionResult:
-        """Withhold a threshold placed where the pavement begins while a threshold marking was seen
-        inside the pavement within ``marking_memory_s`` (module docstring); remember the marking."""
+        """Withhold a threshold placed where the pavement begins while two frames of the last
+        ``marking_memory_s`` saw a threshold marking the same runway widths inside the pavement
+        (module docstring); remember this frame's marking."""
         p = self.params
         seen = [(t, w) for t, w in self.markings_seen if t_s - t <= p.marking_memory_s]
         if result.pavement_marking_widths >= p.marking_memory_min_widths:       # NaN: none seen
