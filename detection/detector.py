@@ -43,7 +43,7 @@ from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point
 from visland.folder import as_grey, ignored_pixels, scene_frame
 from visland.runway import CORNER_NAMES
 
-__all__ = ["detect_runway", "check_frame", "block_grid_ratio"]
+__all__ = ["detect_runway", "check_frame", "block_grid_ratio", "block_grid_steps"]
 
 
 def check_frame(image, camera: CameraModel) -> str | None:
@@ -177,12 +177,15 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     spread = _percentile_spread(sample, *params.contrast_percentiles) if sample.size else 0.0
     if spread < params.min_contrast:
         return fail(f"frame has no contrast below the horizon (grey levels within {spread:.0f})")
-    if block_grid_ratio(image, ground, params.block_grid_px, params.block_sample_rows) >= params.block_grid_min_ratio:
+    across, elsewhere = block_grid_steps(image, ground, params.block_grid_px, params.block_sample_rows)
+    if elsewhere > 0 and across / elsewhere >= params.block_grid_min_ratio:
         # a coarsely compressed frame: its edges are staircases of blocks (edge points off by up
-        # to half a block, a straight line's residuals a saw-tooth of 1-2 px RMS); smoothed, the
-        # staircase is partly averaged out, and what is left is not taken for a bent line
+        # to half a block, a straight line's residuals a saw-tooth of 1-2 px RMS), not taken for a
+        # bent line; where the grid steps strongly (a noisy sensor's coarse JPEG) it is also
+        # smoothed, which averages the staircase out (a faint grid is not: smoothing then costs
+        # a small runway its contrast)
         params = params.for_block_grid()
-        if params.deblock_sigma_px > 0:
+        if params.deblock_sigma_px > 0 and across - elsewhere >= params.deblock_min_grid_step:
             image = cv2.GaussianBlur(image, (0, 0), params.deblock_sigma_px)
             if colour is not None:
                 colour = cv2.GaussianBlur(colour, (0, 0), params.deblock_sigma_px)
@@ -230,14 +233,24 @@ def block_grid_ratio(image: np.ndarray, ground, block_px: int = 8, rows: int = 3
     float
         The ratio; NaN when the box holds fewer than two blocks across or is flat.
     """
+    across, inside = block_grid_steps(image, ground, block_px, rows)
+    return across / inside if inside > 0 else math.nan
+
+
+def block_grid_steps(image: np.ndarray, ground, block_px: int = 8, rows: int = 32) -> tuple[float, float]:
+    """``(across, elsewhere)``: the mean absolute grey-level step between neighbouring columns
+    across the block grid's lines and elsewhere (:func:`block_grid_ratio`'s two terms; NaN when
+    the box holds fewer than two blocks across). Their difference is the grid's own step in grey
+    levels: 3.0-3.3 on a noisy sensor's JPEG of quality 40-50, 1.2-2.0 on visland's clean 512 px
+    frames through OpenCV's MJPG writer, 0.8-1.5 on clean JPEGs of quality 75-40 (the ray-cast
+    airport of tests/detection/test_detection_noise.py)."""
     u0, v0, u1, v1 = (int(a) for a in ground)
     if u1 - u0 < 2 * block_px or v1 - v0 < 3:
-        return math.nan
+        return math.nan, math.nan
     levels = image[_sample_rows(ground, rows), u0:u1].astype(np.int16)
     steps = np.abs(np.diff(levels, axis=1))
     across = (np.arange(u0, u1 - 1) + 1) % block_px == 0
-    inside = float(steps[:, ~across].mean())
-    return float(steps[:, across].mean()) / inside if inside > 0 else math.nan
+    return float(steps[:, across].mean()), float(steps[:, ~across].mean())
 
 
 def _percentile_spread(levels: np.ndarray, q_low: float, q_high: float) -> float:

@@ -438,9 +438,14 @@ class DetectorParams(ParamsFile):
         sqrt(12)`` (2.3 px for 8 px blocks). On such a frame ``confidence_residual_px`` and
         ``max_line_residual_px`` are at least that (:meth:`for_block_grid`): a straight edge's
         staircase is not taken for a bent line.
-    deblock_sigma_px : float
-        Such a frame is also smoothed by a Gaussian of this sigma (pixels) before the search,
-        which averages the staircase out along the edges (0: not smoothed).
+    deblock_sigma_px, deblock_min_grid_step : float
+        Such a frame whose grid steps by at least ``deblock_min_grid_step`` grey levels more than
+        the frame elsewhere (:func:`visland.detection.detector.block_grid_steps`) is also
+        smoothed by a Gaussian of this sigma (pixels) before the search, which averages the
+        staircase out along the edges (0: not smoothed). A noisy sensor's JPEG of quality 40-50
+        steps 3.0-3.3 levels more on the grid; visland's clean 512 px frames through OpenCV's
+        MJPG writer 1.2-2.0 (ratio 2.3-3.1): smoothed, 43 of their 104 frames found instead of
+        all but a few (tests/datasets/test_process.py's video).
     roi_margin_px : float
         Margin added around the predicted runway in tracking mode.
     roi_margin_fraction : float
@@ -836,6 +841,7 @@ class DetectorParams(ParamsFile):
     block_grid_px: int = 8
     block_grid_min_ratio: float = 2.0
     deblock_sigma_px: float = 1.5
+    deblock_min_grid_step: float = 2.7
     # --- tracking, the measurement and its confidence (detector)
     roi_margin_px: float = 40.0
     roi_margin_fraction: float = 0.15
@@ -1012,7 +1018,7 @@ class DetectorParams(ParamsFile):
         "boundary_stripe_shift_scale_px": (0.01, 100.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
         "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
         "block_sample_rows": (1, 4096, "int"), "block_grid_px": (2, 64, "int"),
-        "block_grid_min_ratio": (1.0, 100.0), "deblock_sigma_px": (0.0, 10.0),
+        "block_grid_min_ratio": (1.0, 100.0), "deblock_min_grid_step": (0.0, 255.0), "deblock_sigma_px": (0.0, 10.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
         "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "min_confidence": (0.0, 1.0),
