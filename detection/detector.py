@@ -243,7 +243,24 @@ def block_grid_steps(image: np.ndarray, ground, block_px: int = 8, rows: int = 3
     the box holds fewer than two blocks across). Their difference is the grid's own step in grey
     levels: 3.0-3.3 on a noisy sensor's JPEG of quality 40-50, 1.2-2.0 on visland's clean 512 px
     frames through OpenCV's MJPG writer, 0.8-1.5 on clean JPEGs of quality 75-40 (the ray-cast
-    airport of tests/detection/test_detection_noise.py)."""
+    airport of tests/detection/test_detection_noise.py).
+
+    Parameters
+    ----------
+    image : ndarray (H, W) uint8
+        The grey frame.
+    ground : tuple of 4 int
+        ``(u0, v0, u1, v1)``: the ground's bounding box, end exclusive.
+    block_px : int, optional
+        The block's side (pixels), the grid aligned with pixel (0, 0).
+    rows : int, optional
+        Rows read, spread evenly over the box.
+
+    Returns
+    -------
+    tuple of 2 float
+        Grey levels per column step.
+    """
     u0, v0, u1, v1 = (int(a) for a in ground)
     if u1 - u0 < 2 * block_px or v1 - v0 < 3:
         return math.nan, math.nan
