@@ -241,9 +241,10 @@ def block_grid_steps(image: np.ndarray, ground, block_px: int = 8, rows: int = 3
     """``(across, elsewhere)``: the mean absolute grey-level step between neighbouring columns
     across the block grid's lines and elsewhere (:func:`block_grid_ratio`'s two terms; NaN when
     the box holds fewer than two blocks across). Their difference is the grid's own step in grey
-    levels: 3.0-3.3 on a noisy sensor's JPEG of quality 40-50, 1.2-2.0 on visland's clean 512 px
-    frames through OpenCV's MJPG writer, 0.8-1.5 on clean JPEGs of quality 75-40 (the ray-cast
-    airport of tests/detection/test_detection_noise.py).
+    levels: 3.0-3.3 on a noisy sensor's JPEG of quality 40 (the ray-cast airport of
+    tests/detection/test_detection_noise.py), 2.24-2.43 on the robustness study's JPEG 50 with
+    noise and blur, 1.2-2.0 on visland's clean 512 px frames through OpenCV's MJPG writer,
+    0.8-1.5 on clean JPEGs of quality 75-40.
 
     Parameters
     ----------

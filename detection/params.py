@@ -442,10 +442,13 @@ class DetectorParams(ParamsFile):
         Such a frame whose grid steps by at least ``deblock_min_grid_step`` grey levels more than
         the frame elsewhere (:func:`visland.detection.detector.block_grid_steps`) is also
         smoothed by a Gaussian of this sigma (pixels) before the search, which averages the
-        staircase out along the edges (0: not smoothed). A noisy sensor's JPEG of quality 40-50
-        steps 3.0-3.3 levels more on the grid; visland's clean 512 px frames through OpenCV's
-        MJPG writer 1.2-2.0 (ratio 2.3-3.1): smoothed, 43 of their 104 frames found instead of
-        all but a few (tests/datasets/test_process.py's video).
+        staircase out along the edges (0: not smoothed). Measured grid steps: the robustness
+        study's 'sensor: noise, blur, JPEG' frames (JPEG 50, noise 6, blur 1 px, 1024 px)
+        2.24-2.43 levels, a noisy JPEG of quality 40 on the ray-cast airport 3.0-3.3; visland's
+        clean 512 px frames through OpenCV's MJPG writer 1.2-2.0 (ratio 2.3-3.1; smoothed, 43 of
+        their 104 frames were found: tests/datasets/test_process.py's video), clean JPEGs of
+        quality 75-40 0.8-1.5. The limit lies between the two groups, with little room on
+        either side (0.1-0.15 levels).
     roi_margin_px : float
         Margin added around the predicted runway in tracking mode.
     roi_margin_fraction : float
@@ -841,7 +844,7 @@ class DetectorParams(ParamsFile):
     block_grid_px: int = 8
     block_grid_min_ratio: float = 2.0
     deblock_sigma_px: float = 1.5
-    deblock_min_grid_step: float = 2.7
+    deblock_min_grid_step: float = 2.15
     # --- tracking, the measurement and its confidence (detector)
     roi_margin_px: float = 40.0
     roi_margin_fraction: float = 0.15
