@@ -291,13 +291,8 @@ class DetectionSequence:
         jump = float(np.max(np.linalg.norm(result.corners_uv[:2] - prior.corners_uv[:2], axis=1)))
         if jump <= limit:
             return result
-        corners = result.corners_uv.copy()
-        corners[:2] = np.nan
-        found = result.corners_found.copy()
-        found[:2] = False
-        note = f"threshold corners dropped: moved {jump:.0f} px since {dt:.2f} s earlier (> {limit:.0f})"
-        return replace(result, corners_uv=corners, corners_found=found, threshold_line=(math.nan, math.nan),
-                       reason="; ".join(filter(None, [result.reason, note])), notes=result.notes + (note,))
+        return _without_threshold(result, f"threshold corners dropped: moved {jump:.0f} px since {dt:.2f} s earlier "
+                                          f"(> {limit:.0f})")
 
     def _follow_threshold(self, result: DetectionResult, t_s: float) -> DetectionResult:
         """Check the threshold's width against its track (module docstring); update the track."""
@@ -322,14 +317,8 @@ class DetectionSequence:
                     self.threshold_track = rejected
                     self.threshold_rejected = []
                     return result
-                note = (f"threshold withheld: {width:.1f} px wide where its track predicts {predicted:.1f} px "
-                        f"(tolerance {tolerance:.1f})")
-                corners = result.corners_uv.copy()
-                corners[:2] = np.nan
-                found = result.corners_found.copy()
-                found[:2] = False
-                return replace(result, corners_uv=corners, corners_found=found, threshold_line=(math.nan, math.nan),
-                               reason="; ".join(filter(None, [result.reason, note])), notes=result.notes + (note,))
+                return _without_threshold(result, f"threshold withheld: {width:.1f} px wide where its track "
+                                                  f"predicts {predicted:.1f} px (tolerance {tolerance:.1f})")
         self.threshold_rejected = []
         self.threshold_track = track + [(t_s, width)]
         return result
