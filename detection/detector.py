@@ -32,8 +32,8 @@ from visland.camera import CameraModel
 from visland.detection.candidates import candidate_lines, check_lines, hough_segments
 from visland.detection.horizon import HorizonFrame, horizon_frame
 from visland.detection.params import DetectorParams
-from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of, refine_line,
-                                     sample_profiles)
+from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of,
+                                     net_step, refine_line, sample_profiles)
 from visland.detection.result import DetectionResult, not_found
 from visland.detection.threshold_marking import ground_begins, threshold_marking
 from visland.detection.transverse import find_transverse_line, pavement_beyond_edges, surface_extent
@@ -219,14 +219,8 @@ def block_grid_ratio(image: np.ndarray, ground, block_px: int = 8, rows: int = 3
 
     Parameters
     ----------
-    image : ndarray (H, W) uint8
-        The grey frame.
-    ground : tuple of 4 int
-        ``(u0, v0, u1, v1)``: the ground's bounding box, end exclusive.
-    block_px : int, optional
-        The block's side (pixels), the grid aligned with pixel (0, 0).
-    rows : int, optional
-        Rows read, spread evenly over the box.
+    image, ground, block_px, rows
+        As :func:`block_grid_steps`.
 
     Returns
     -------
@@ -861,7 +855,8 @@ def _edge_step(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: Dete
     :data:`BALANCE_PROFILES` points of the edge: the mean of the surface between 1 px and a band
     beyond the edge, minus the mean of the pavement between the side stripe's reach (as in
     :func:`_refine_edge`: ``side_stripe_width_fraction`` of the local width plus
-    ``edge_blur_px``) and a band past it; the band is 15 % of the local width, 1.5 to 8 px.
+    ``edge_blur_px``) and a band past it (:func:`visland.detection.refine.net_step`, as the edge
+    refinement measures each profile's net step); the band is 15 % of the local width, 1.5 to 8 px.
     ``image`` is grey levels or RGB (its chroma is sampled). NaN when nothing is sampled.
     """
     segment, other = np.asarray(segment_uv, float), np.asarray(other_uv, float)
@@ -880,16 +875,11 @@ def _edge_step(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: Dete
     reach = params.side_stripe_width_fraction * width + params.edge_blur_px
     band = np.clip(0.15 * width, 1.5, 8.0)
     profiles, offsets = sample_profiles(image, points, outward, direction, float((reach + band).max()) + 3.0)
-    finite = np.isfinite(profiles)
-    outside = (offsets[None, :] >= 1.0) & (offsets[None, :] <= 1.0 + band[:, None]) & finite
-    inside = ((offsets[None, :] <= -(reach[:, None] + 0.5)) & (offsets[None, :] >= -(reach + 0.5 + band)[:, None])
-              & finite)
-    sampled = outside.any(axis=1) & inside.any(axis=1)
-    if not sampled.any():
-        return math.nan
-    level_out = np.where(outside, profiles, 0.0).sum(axis=1) / np.maximum(outside.sum(axis=1), 1)
-    level_in = np.where(inside, profiles, 0.0).sum(axis=1) / np.maximum(inside.sum(axis=1), 1)
-    return float(np.median((level_out - level_in)[sampled]))
+    # the profiles are centred on the edge and run outwards: the boundary at offset 0
+    net = net_step(profiles, offsets, np.zeros(len(points)), 1, reach, (1.0, 1.0 + band[:, None]),
+                    (0.5, 0.5 + band[:, None]))
+    sampled = np.isfinite(net)
+    return float(np.median(net[sampled])) if sampled.any() else math.nan
 
 
 def _unbalanced_edges(ctx: _Context, pair: _EdgePair) -> str:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields, replace
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
@@ -1109,8 +1110,13 @@ class DetectorParams(ParamsFile):
         Returns
         -------
         DetectorParams
-            ``self`` when both already allow it, else a copy.
+            ``self`` when both already allow it, else a copy, made once per parameter set (a
+            copy validates every field again: 0.65 ms, on every frame of a compressed video).
         """
+        return self._block_grid_params
+
+    @cached_property
+    def _block_grid_params(self) -> "DetectorParams":
         staircase_px = self.block_grid_px / math.sqrt(12.0)
         if self.confidence_residual_px >= staircase_px and self.max_line_residual_px >= staircase_px:
             return self

@@ -24,7 +24,7 @@ from visland.detection.params import DetectorParams
 
 __all__ = ["PixelLine", "LineFit", "NoFit", "SLOPE_PER_STEP", "median_of", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
            "stripe_offsets", "fit_line", "refine_line", "chroma_boundary", "chroma_of",
-           "remap_inside"]
+           "remap_inside", "net_step"]
 
 _DERIVATIVE = np.array([-1.0, -2.0, 0.0, 2.0, 1.0]) / 8.0
 #: Peak slope of the 5-tap derivative across a step blurred by about a pixel, per unit of step
@@ -786,8 +786,8 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
             # the region's boundary separates its inside (past a border stripe) from its outside:
             # a marking's edge inside the region (its grey level against the surface) or a texture
             # edge outside it does not change the grey level the way the boundary does
-            net = _net_step(profiles, offsets, position, outward, stripe_reach, params.net_step_outside_px,
-                            params.net_step_inside_px)
+            net = np.nan_to_num(net_step(profiles, offsets, position, outward, stripe_reach,
+                                          params.net_step_outside_px, params.net_step_inside_px))
             sign = net_polarity or int(np.sign(median_of(net[keep])) or 1)
             keep &= net * sign >= params.refine_net_fraction * median_of(np.abs(net[keep]))
             why += f", {int(keep.sum())} changing the grey level the boundary's way"
@@ -941,10 +941,33 @@ def _fit_statistics(line: PixelLine, points: np.ndarray, min_sigma_px: float = 0
             sigma / math.sqrt(spread) if spread > 0 else math.inf)
 
 
-def _net_step(profiles: np.ndarray, offsets: np.ndarray, position: np.ndarray, outward: int,
-              stripe_reach, outside_px: tuple, inside_px: tuple) -> np.ndarray:
+def net_step(profiles: np.ndarray, offsets: np.ndarray, position: np.ndarray, outward: int,
+             stripe_reach, outside_px: tuple, inside_px: tuple) -> np.ndarray:
     """Grey level just outside a located boundary (between ``outside_px`` beyond it) minus inside
-    it past a border stripe (between ``inside_px`` beyond the stripe's reach)."""
+    it past a border stripe (between ``inside_px`` beyond the stripe's reach), per profile.
+
+    Parameters
+    ----------
+    profiles : ndarray (n, m)
+        Profiles across the boundary (:func:`sample_profiles`), NaN where not sampled.
+    offsets : ndarray (m,)
+        Position of each sample along the profile (pixels).
+    position : ndarray (n,)
+        The boundary's offset on each profile (NaN: none located).
+    outward : int
+        The sign of the offsets on the outside (+1 or -1).
+    stripe_reach : float or ndarray (n,)
+        How far inside the boundary a border stripe may reach (pixels).
+    outside_px, inside_px : tuple of 2
+        The bands read, pixels beyond the boundary and beyond the stripe's reach; each limit a
+        number or an array of shape (n, 1) (one band per profile).
+
+    Returns
+    -------
+    ndarray (n,)
+        The net step, grey levels; NaN where a profile holds no sample on one side or no
+        boundary.
+    """
     out_dir = 1.0 if outward >= 0 else -1.0
     pos = np.nan_to_num(position)[:, None] * out_dir
     reach = np.broadcast_to(np.asarray(stripe_reach, float), (len(profiles),))[:, None]
@@ -959,7 +982,7 @@ def _net_step(profiles: np.ndarray, offsets: np.ndarray, position: np.ndarray, o
 
     net = mean(outside) - mean(inside)
     ok = ((outside & finite).sum(axis=1) > 0) & ((inside & finite).sum(axis=1) > 0) & np.isfinite(position)
-    return np.where(ok, net, 0.0)
+    return np.where(ok, net, np.nan)
 
 
 def _largest_run(t: np.ndarray, mask: np.ndarray, max_gap: float) -> np.ndarray:
