@@ -662,6 +662,12 @@ class DetectorParams(ParamsFile):
         ``threshold_width_tolerance_px + threshold_width_tolerance_fraction * predicted width``
         is not the threshold followed so far (a marking, a joining pavement): its corners are
         withheld.
+    threshold_shrink_memory_s : float
+        Over a sequence, where the track holds fewer than three widths: a threshold narrower
+        than the last one accepted in the last this many seconds, by more than the tolerance
+        above, is withheld: flying toward the threshold its width ``f W / depth`` only grows.
+        (Against the widest of the memory instead, the noisy frames of the robustness study's
+        'sensor' condition lost 44 correct thresholds to one high width.)
     threshold_width_noise_sigmas : float
         The tolerance above also grows by this many times the prediction's relative standard
         error (the track's own scatter about its fitted line, from five samples on), times the
@@ -947,6 +953,7 @@ class DetectorParams(ParamsFile):
     threshold_width_tolerance_px: float = 2.0
     threshold_width_tolerance_fraction: float = 0.04
     threshold_width_noise_sigmas: float = 3.0
+    threshold_shrink_memory_s: float = 5.0
     marking_memory_s: float = 10.0
     marking_memory_agreement: float = 0.25
     marking_memory_min_widths: float = 2.0
@@ -1073,7 +1080,7 @@ class DetectorParams(ParamsFile):
         "static_max_motion_ratio": (0.0, 1.0), "identity_memory_s": (0.0, 600.0), "identity_k_tolerance": (0.0, 100.0), "identity_k_rate": (0.0, 100.0),
         "identity_width_tolerance": (0.0, 100.0), "identity_width_rate": (0.0, 100.0),
         "threshold_width_tolerance_px": (0.0, 1000.0), "threshold_width_tolerance_fraction": (0.0, 10.0),
-        "threshold_width_noise_sigmas": (0.0, 100.0),
+        "threshold_width_noise_sigmas": (0.0, 100.0), "threshold_shrink_memory_s": (0.0, 600.0),
         "marking_memory_s": (0.0, 3600.0), "marking_memory_agreement": (0.0, 10.0),
         "marking_memory_min_widths": (0.0, 1000.0), "reference_rate_hz": (0.1, 10000.0),
         "reference_side_px": (16, 100000, "int"), "reference_focal_px": (1.0, 1e6),

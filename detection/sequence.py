@@ -20,7 +20,11 @@ followed as a track: at a steady ground speed the reciprocal of its width in pix
 widths' own scatter about the track (a noisy low-resolution track must not withhold its correct
 frames); a threshold off that prediction (a marking
 or a pavement joining the runway taken for it) has its corners withheld, and three rejections in
-a row that agree with each other start the track afresh. After ``hold_s`` without a good
+a row that agree with each other start the track afresh. Flying toward the threshold its
+width only grows: where the track holds fewer than three widths, one narrower than the last
+threshold accepted in the last ``threshold_shrink_memory_s`` seconds (less the same tolerance) is
+withheld (below 100 ft, once the threshold had left the frame below, the touchdown zone's bars
+were taken for it; with a track, its prediction does this and more). After ``hold_s`` without a good
 detection the next search starts afresh.
 
 A threshold marking seen inside the pavement (a displaced threshold's bar, the stripes after a
@@ -95,6 +99,7 @@ class DetectionSequence:
         self.t_good_s: float | None = None
         self.threshold_track: list[tuple[float, float]] = []      # (t_s, width_px) accepted
         self.threshold_rejected: list[tuple[float, float]] = []   # rejected in a row
+        self.threshold_widths: list[tuple[float, float]] = []     # (t_s, width_px) accepted, shrink memory
         self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
         self.identity: tuple | None = None                        # (t_s, k_centre, width_ratio) last accepted
         self.recent: list[tuple[float, DetectionResult]] = []     # found, within static_window_s
@@ -106,6 +111,7 @@ class DetectionSequence:
         self.t_good_s = None
         self.threshold_track = []
         self.threshold_rejected = []
+        self.threshold_widths = []
         self.image_attitude = None
         self.identity = None
         self.recent = []
@@ -304,10 +310,22 @@ class DetectionSequence:
         p = self.params
         track = [(t, w) for t, w in self.threshold_track if t_s - p.threshold_track_s <= t < t_s]
         self.threshold_track = track
+        predicted, scatter = _width_prediction(track, t_s) if len(track) >= 3 else (math.nan, 0.0)
+        spread = p.threshold_width_tolerance_fraction + p.threshold_width_noise_sigmas * scatter
+        # flying toward it, the threshold's width (f W / depth) only grows: where the track is too
+        # short to predict, a threshold narrower than the last one accepted in the last seconds is
+        # something farther along the runway (a marking, seen once the threshold has left the
+        # frame below)
+        self.threshold_widths = [(t, w) for t, w in self.threshold_widths if t_s - p.threshold_shrink_memory_s <= t < t_s]
+        if self.threshold_widths and len(track) < 3:
+            t_last, last = self.threshold_widths[-1]
+            if width < last - p.threshold_width_tolerance_px - spread * last:
+                return _without_threshold(result, f"threshold withheld: {width:.1f} px wide, narrower than the "
+                                                  f"{last:.1f} px accepted {t_s - t_last:.1f} s earlier (flying "
+                                                  "toward the threshold its width only grows)")
+        self.threshold_widths.append((t_s, width))
         if len(track) >= 3:
-            predicted, scatter = _width_prediction(track, t_s)
-            tolerance = (p.threshold_width_tolerance_px
-                         + (p.threshold_width_tolerance_fraction + p.threshold_width_noise_sigmas * scatter) * predicted)
+            tolerance = p.threshold_width_tolerance_px + spread * predicted
             if not abs(width - predicted) <= tolerance:
                 rejected = [(t, w) for t, w in self.threshold_rejected if t_s - p.threshold_track_s <= t < t_s]
                 rejected.append((t_s, width))
@@ -317,6 +335,7 @@ class DetectionSequence:
                     self.threshold_track = rejected
                     self.threshold_rejected = []
                     return result
+                self.threshold_widths.pop()
                 return _without_threshold(result, f"threshold withheld: {width:.1f} px wide where its track "
                                                   f"predicts {predicted:.1f} px (tolerance {tolerance:.1f})")
         self.threshold_rejected = []

@@ -155,6 +155,22 @@ def test_a_noisy_track_keeps_its_correct_thresholds_and_still_withholds_a_taxiwa
     assert results[11].corners_found[:2].all()
 
 
+def test_a_threshold_narrower_than_one_just_accepted_is_withheld(scripted):
+    # 512 px, 60 ft: the threshold seen in two frames (392 and 444 px wide, too few for a track),
+    # then gone below the frame, then the touchdown zone's bars taken for it, 162 px wide
+    # (tests/datasets/test_process.py's approach, frames 98-101)
+    widths = [392.0, 444.0]
+    for memory, kept in ((5.0, False), (0.0, True)):
+        scripted([_result(width=w) for w in widths] + [_result(width=300.0)])
+        params = replace(DetectorParams(), threshold_shrink_memory_s=memory)
+        results = _run(seq_module.DetectionSequence(CAMERA, params=params), 3, dt=0.2)
+        assert results[1].corners_found[:2].all()
+        assert bool(results[2].corners_found[:2].all()) == kept
+        if not kept:
+            assert "narrower than the 444.0 px accepted 0.2 s earlier" in results[2].reason
+            assert results[2].found and results[2].corners_found[2:].all()    # the edges stay
+
+
 def test_a_new_track_replaces_a_wrong_one_after_three_agreeing_rejections(scripted):
     # the first three frames followed a wrong object; from frame 3 on, the true threshold
     wrong = 0.8 * _widths_of_an_approach(3)
