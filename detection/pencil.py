@@ -28,7 +28,7 @@ from visland.detection.horizon import HorizonFrame
 from visland.detection.params import DetectorParams
 from visland.detection.refine import median_of
 
-__all__ = ["PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_quantiles", "row_mean", "finite_median",
+__all__ = ["FloatFrame", "PencilImage", "PencilEdges", "rectify", "pencil_edges", "row_quantile", "row_quantiles", "row_mean", "finite_median",
            "as_slice"]
 
 
@@ -126,6 +126,45 @@ class PencilEdges:
             return (np.nan_to_num(per_band) * w).sum(axis=1) / w.sum(axis=1)
 
 
+class FloatFrame:
+    """A grey frame read as float32 (what :func:`rectify` interpolates), converted by the region
+    asked for and kept: a region inside the last one converted is a view of it, not another
+    conversion. One frame's tracking reads nearly the same wedge twice (where the runway's
+    surface ends, around the predicted edges and then around the measured ones), a box up to
+    half the frame.
+
+    Parameters
+    ----------
+    image : ndarray of uint8, shape (H, W)
+        The grey frame.
+    margin_px : int, optional
+        Pixels added on each side of a region converted (clipped to the frame), so that a
+        slightly different region asked next is still inside it.
+    """
+
+    def __init__(self, image: np.ndarray, margin_px: int = 32):
+        self.image = image
+        self.shape = image.shape
+        self.margin_px = int(margin_px)
+        self._box = None
+        self._values = None
+
+    def crop(self, u0: int, v0: int, u1: int, v1: int) -> np.ndarray:
+        """``image[v0:v1, u0:u1]`` as float32 (the same values as ``np.asarray(..., np.float32)``)."""
+        box = self._box
+        if box is None or not (box[0] <= u0 and box[1] <= v0 and u1 <= box[2] and v1 <= box[3]):
+            height, width = self.shape[:2]
+            m = self.margin_px
+            box = (max(0, u0 - m), max(0, v0 - m), min(width, u1 + m), min(height, v1 + m))
+            self._values = np.asarray(self.image[box[1]:box[3], box[0]:box[2]], dtype=np.float32)
+            self._box = box
+        return self._values[v0 - box[1]:v1 - box[1], u0 - box[0]:u1 - box[0]]
+
+
+#: Bands of rows :func:`rectify` reads from separate crops of the frame.
+RECTIFY_BANDS = 4
+
+
 def rectify(image, horizon: HorizonFrame, s0: float, k_range: tuple, d_range: tuple,
             max_rows: int = 160, max_columns: int = 4096, pixel_step: float = 0.5,
             geometric_rows: bool = False) -> PencilImage | None:
@@ -138,8 +177,9 @@ def rectify(image, horizon: HorizonFrame, s0: float, k_range: tuple, d_range: tu
 
     Parameters
     ----------
-    image : ndarray, shape (H, W)
-        Full-resolution grey frame (uint8 or float32).
+    image : ndarray, shape (H, W), or FloatFrame
+        Full-resolution grey frame (uint8 or float32), or one read through a
+        :class:`FloatFrame` (a region converted once for several calls).
     horizon : HorizonFrame
         The frame's horizon, which sets the (s, d) coordinates.
     s0 : float
@@ -187,17 +227,38 @@ def rectify(image, horizon: HorizonFrame, s0: float, k_range: tuple, d_range: tu
     inside = (u >= 0) & (u <= width - 1) & (v >= 0) & (v <= height - 1)
     if not inside.any():
         return None
-    # extremes over the samples inside the frame (reductions with a mask: no copies)
-    u0 = int(max(0, math.floor(float(u.min(where=inside, initial=np.inf))) - 1))
-    v0 = int(max(0, math.floor(float(v.min(where=inside, initial=np.inf))) - 1))
-    u1 = int(min(width, math.ceil(float(u.max(where=inside, initial=-np.inf))) + 2))
-    v1 = int(min(height, math.ceil(float(v.max(where=inside, initial=-np.inf))) + 2))
-    crop = np.asarray(image[v0:v1, u0:u1], dtype=np.float32)
-    map_u = np.where(inside, u - np.float32(u0), np.float32(-10.0))
-    map_v = np.where(inside, v - np.float32(v0), np.float32(-10.0))
-    values = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    values[~inside] = np.nan                  # remap's own float32 output, written in place
+    # Each band of rows is read from a float32 crop of the frame around its samples: in a row
+    # the samples lie on a segment, between its first and last column, so a band's samples
+    # inside the frame lie in the box of those ends (clipped to the frame; a pixel of margin
+    # for the interpolation). The crop's whole-pixel origin is subtracted exactly, so the
+    # values are the whole frame's to the bit whatever the crop; the bands' crops together are
+    # much smaller than one box around the wedge of samples (half the frame for a far runway).
+    # (through a FloatFrame, the whole box is asked for once and the bands are views of it)
+    ends_u, ends_v = u[:, [0, -1]], v[:, [0, -1]]
+    whole = None
+    if isinstance(image, FloatFrame):
+        whole = _crop_box(ends_u, ends_v, width, height)
+        whole_crop = image.crop(*whole)
+    values = np.empty(u.shape, np.float32)
+    for band in np.array_split(np.arange(n_rows), min(n_rows, RECTIFY_BANDS)):
+        rows = slice(int(band[0]), int(band[-1]) + 1)
+        u0, v0, u1, v1 = _crop_box(ends_u[rows], ends_v[rows], width, height)
+        if u1 - u0 < 2 or v1 - v0 < 2:
+            continue                          # no sample of the band inside the frame
+        crop = (np.asarray(image[v0:v1, u0:u1], dtype=np.float32) if whole is None
+                else whole_crop[v0 - whole[1]:v1 - whole[1], u0 - whole[0]:u1 - whole[0]])
+        map_u = np.where(inside[rows], u[rows] - np.float32(u0), np.float32(-10.0))
+        map_v = np.where(inside[rows], v[rows] - np.float32(v0), np.float32(-10.0))
+        values[rows] = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    values[~inside] = np.nan
     return PencilImage(float(s0), k, d, values)
+
+
+def _crop_box(u: np.ndarray, v: np.ndarray, width: int, height: int) -> tuple[int, int, int, int]:
+    """``(u0, v0, u1, v1)`` (end exclusive): the pixels bilinear samples at ``u, v`` within the
+    frame interpolate from, a pixel of margin each side, clipped to the frame."""
+    return (int(max(0, math.floor(float(u.min())) - 1)), int(max(0, math.floor(float(v.min())) - 1)),
+            int(min(width, math.ceil(float(u.max())) + 2)), int(min(height, math.ceil(float(v.max())) + 2)))
 
 
 def _band_edges(profile: np.ndarray, half: int, min_step: float):
@@ -363,11 +424,11 @@ def row_quantiles(values: np.ndarray, qs) -> list:
     if values.ndim != 2 or values.shape[1] == 0:
         return [np.full(len(values), np.nan) for _ in qs]
     ordered = np.sort(values, axis=1)                      # NaN sort last
-    count = np.isfinite(ordered).sum(axis=1)
+    count = np.count_nonzero(np.isfinite(ordered), axis=1)
     rows = np.arange(len(ordered))
     out = []
     for q in qs:
-        index = np.clip(np.floor(q * (count - 1) + 0.5).astype(int), 0, values.shape[1] - 1)
+        index = np.minimum(np.maximum(np.floor(q * (count - 1) + 0.5).astype(int), 0), values.shape[1] - 1)
         out.append(np.where(count > 0, ordered[rows, index], np.nan))
     return out
 
@@ -385,7 +446,7 @@ def row_mean(values: np.ndarray) -> np.ndarray:
     ndarray, shape (n,)
     """
     finite = np.isfinite(values)
-    count = finite.sum(axis=1)
+    count = np.count_nonzero(finite, axis=1)
     total = np.where(finite, values, 0.0).sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(count > 0, total / np.maximum(count, 1), np.nan)

@@ -22,7 +22,7 @@ import numpy as np
 
 from visland.detection.params import DetectorParams
 
-__all__ = ["PixelLine", "LineFit", "NoFit", "SLOPE_PER_STEP", "median_of", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
+__all__ = ["PixelLine", "LineFit", "NoFit", "SLOPE_PER_STEP", "median_of", "percentile_of", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
            "stripe_offsets", "fit_line", "refine_line", "chroma_boundary", "chroma_of",
            "remap_inside", "net_step"]
 
@@ -169,6 +169,43 @@ def median_of(values):
     return out
 
 
+def percentile_of(values, q: float):
+    """``np.percentile(values, q)`` (its default linear interpolation) of all the values, for a
+    Python number ``q``: the same number and type (NaN if any is NaN), without numpy's
+    generality (axes, methods, weights), which costs tens of microseconds on short arrays.
+
+    Parameters
+    ----------
+    values : array_like
+        Any shape; all values count.
+    q : float
+        The percentile, 0 to 100 (a Python int or float).
+
+    Returns
+    -------
+    numpy scalar
+        The percentile, of the type ``np.percentile`` returns.
+    """
+    a = np.asarray(values)
+    n = a.size
+    if n == 0 or a.dtype.kind != "f" or type(q) not in (int, float) or not 0 <= q <= 100:
+        return np.percentile(a, q)
+    # numpy's steps: the virtual index (n - 1) q / 100, the order statistics either side of it
+    # (the last one when it is the last index), the weight between them as a Python float
+    virtual = (n - 1) * (q / 100)
+    lo = hi = n - 1 if virtual >= n - 1 else math.floor(virtual)
+    if virtual < n - 1:
+        hi = lo + 1
+    gamma = virtual - (-1 if virtual >= n - 1 else lo)
+    part = np.partition(a.ravel(), sorted({lo, hi, n - 1}))
+    if np.isnan(part[n - 1]):
+        return part.dtype.type(np.nan)
+    below, above = part[lo], part[hi]
+    difference = above - below
+    # numpy's _lerp: from below, or from above when the weight is at least a half
+    return above - difference * (1 - gamma) if gamma >= 0.5 else below + difference * gamma
+
+
 def chroma_of(rgb: np.ndarray) -> np.ndarray:
     """Chroma of a uint8 RGB image: largest minus smallest channel, (H, W) uint8 (0 for greys).
 
@@ -284,7 +321,8 @@ def sample_profiles(image, centres_uv, normal_uv, direction_uv, halfwidth_px: fl
     values = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     values = values.reshape(n, 3, -1)
     values[outside.reshape(n, 3, -1)] = np.nan
-    return values.mean(axis=1), offsets
+    # the three taps' mean (the sum in tap order, then the division: ``mean(axis=1)``'s bits)
+    return (values[:, 0] + values[:, 1] + values[:, 2]) / 3, offsets
 
 
 def _derivative(profiles: np.ndarray, step_px: float) -> np.ndarray:
@@ -798,7 +836,7 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
         if keep.sum() < 3:
             return NoFit(f"no consistent step along the line ({why})")
         points = centres + position[:, None] * current.normal
-        weights = np.where(keep, np.minimum(strength, np.percentile(strength[keep], params.fit_weight_cap_percentile)),
+        weights = np.where(keep, np.minimum(strength, percentile_of(strength[keep], params.fit_weight_cap_percentile)),
                            0.0)
         fitted = fit_line(points, weights)
         if fitted is None:

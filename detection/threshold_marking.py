@@ -37,7 +37,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame, meet_h
 from visland.detection.params import DetectorParams
-from visland.detection.refine import PixelLine, chroma_of, remap_inside
+from visland.detection.refine import PixelLine, chroma_of, percentile_of, remap_inside
 from visland.detection.transverse import TransverseLine, edge_crossings_s, transverse_grid, transverse_line_h
 
 __all__ = ["ThresholdMarking", "threshold_marking", "ground_begins", "STRIPES_FROM_THRESHOLD_WIDTHS"]
@@ -208,9 +208,10 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     # than the pavement differs from the ground (a brighter patch of surface, a seam, rubber
     # deposits, chevrons in yellow are not), which the haze dims in the same proportion
     sign = 1.0
-    bright = float(np.nanpercentile(ok, params.marking_bright_percentile))
+    sampled = ok[~np.isnan(ok)]
+    bright = float(percentile_of(sampled, params.marking_bright_percentile)) if sampled.size else math.nan
     contrast = bright - surface
-    level = np.nanmean(np.where(inside, values, np.nan), axis=1)          # across the width, per line
+    level = np.nanmean(values, axis=1)          # across the width, per line (values: NaN outside)
     doubtful = None
     if unresolved:
         # the stripes of a threshold at the pavement's start lie within its first 0.8 widths (plus

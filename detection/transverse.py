@@ -117,8 +117,9 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
 
     Parameters
     ----------
-    image : ndarray of uint8, shape (H, W)
-        The grey frame, as the camera took it (full resolution).
+    image : ndarray of uint8, shape (H, W), or FloatFrame
+        The grey frame, as the camera took it (full resolution), or read through a
+        :class:`~visland.detection.pencil.FloatFrame` (several calls on one frame).
     horizon : HorizonFrame
         Its horizon: the rows resampled are lines through V1 on it.
     s0 : float
@@ -724,10 +725,10 @@ def _spans_width(values, inside, rows_ok, fractions, depths, outward, depth, lev
     reference = [_transition(level_profile, depths, depth, outward),
                  _transition(texture_profile, depths, depth, outward)]
     for columns in np.array_split(np.arange(len(fractions)), n_parts):
-        sub_inside = np.zeros_like(inside)
-        sub_inside[:, columns] = inside[:, columns]
-        sub_rows = rows_ok & (sub_inside.sum(axis=1) >= 0.5 * len(columns))
-        level, spread = _profiles_of(np.where(sub_inside, values, np.nan), sub_rows, texture=True)
+        part = slice(int(columns[0]), int(columns[-1]) + 1)
+        sub_rows = rows_ok & (np.count_nonzero(inside[:, part], axis=1) >= 0.5 * len(columns))
+        # (the part's columns alone: values are NaN outside ``inside`` already)
+        level, spread = _profiles_of(values[:, part], sub_rows, texture=True)
         ok = False
         for whole, part_profile in zip(reference, (level, spread)):
             part = _transition(part_profile, depths, depth, outward)
@@ -977,7 +978,9 @@ def _step_profile(profile, depths, step_d_px, d_expected, outward, smooth_sigma_
     kernel = np.exp(-0.5 * (np.arange(-4, 5) * step_d_px / smooth_sigma_px) ** 2)
     kernel /= kernel.sum()
     smooth = np.convolve(filled, kernel, mode="same")
-    g = np.gradient(smooth, step_d_px)
+    # np.gradient's central differences (its one-sided ends are zeroed below)
+    g = np.empty_like(smooth)
+    g[1:-1] = (smooth[2:] - smooth[:-2]) / (2.0 * step_d_px)
     g[:5] = 0.0
     g[-5:] = 0.0
     g = np.where(valid, g, 0.0)
@@ -989,6 +992,7 @@ def _step_profile(profile, depths, step_d_px, d_expected, outward, smooth_sigma_
     outside = valid & ((depths > d_expected + 2.0) if outward > 0 else (depths < d_expected - 2.0))
     noise = min(spread(magnitude[valid]), spread(magnitude[outside])) + 1e-3
     light_kernel = np.exp(-0.5 * (np.arange(-2, 3) * step_d_px / light_sigma_px) ** 2)
-    light = np.convolve(np.pad(filled, 2, mode="edge"), light_kernel / light_kernel.sum(), mode="valid")
+    padded = np.concatenate([filled[:1], filled[:1], filled, filled[-1:], filled[-1:]])     # np.pad's "edge"
+    light = np.convolve(padded, light_kernel / light_kernel.sum(), mode="valid")
     light = np.where(valid, light, np.nan)
     return _StepProfile(depths, smooth, g, magnitude, noise, step_d_px, d_expected, light, filled)

@@ -125,3 +125,73 @@ def test_a_centre_line_too_thin_to_see_says_why_it_is_missing():
     assert math.isnan(result.lines["center"][0])
     row = result.to_measurement_row(frame=0, t_s=0.0)
     assert "centre line not found (bright stripe: no consistent step along the line" in row["reason"], row["reason"]
+
+
+def _same_detection(a, b) -> bool:
+    """Two results equal in every field but the time taken (NaN equal to NaN)."""
+    import dataclasses
+    for field in dataclasses.fields(a):
+        if field.name == "elapsed_s":
+            continue
+        x, y = getattr(a, field.name), getattr(b, field.name)
+        pairs = [(x[k], y[k]) for k in x] if isinstance(x, dict) else [(x, y)]
+        for p, q in pairs:
+            try:
+                p_values, q_values = np.asarray(p, float), np.asarray(q, float)
+            except (TypeError, ValueError):           # text: reasons, notes, the mode
+                if p != q:
+                    return False
+                continue
+            if not np.array_equal(p_values, q_values, equal_nan=True):
+                return False
+    return True
+
+
+@pytest.mark.parametrize("distance", [2500.0])
+def test_the_sky_above_the_horizon_is_never_read(distance, monkeypatch):
+    """The grey levels of a colour frame are converted only from SKY_ROWS_READ_PX above the
+    ground's margin down (detector._grey_below_horizon): acquisition and then tracking (the
+    frame again, from its acquisition) give the same results to the bit as with the whole frame
+    converted, and as with the rows above that replaced by noise."""
+    from visland.detection import detector
+    from visland.detection.horizon import horizon_frame
+    from visland.folder import as_grey
+    rgb, camera, state, _ = colour_frame("thesis-1", distance, size=SIZE)
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    horizon = horizon_frame(camera, roll, pitch)
+    margin = DetectorParams().scaled_to(camera).ground_margin_px + detector.SKY_ROWS_READ_PX
+    top = horizon.ground_bbox(camera.width, camera.height, margin_px=margin)[1]
+    assert 20 < top < camera.height // 2
+    np.testing.assert_array_equal(detector._grey_below_horizon(rgb, horizon, margin)[top:],
+                                  cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)[top:])
+    noisy = rgb.copy()
+    noisy[:top] = np.random.default_rng(4).integers(0, 256, noisy[:top].shape, dtype=np.uint8)
+
+    def acquired_then_tracked(image):
+        first = detect_runway(image, camera, roll, pitch)
+        return first, detect_runway(image, camera, roll, pitch, previous=first)
+
+    results = [acquired_then_tracked(rgb), acquired_then_tracked(noisy)]
+    monkeypatch.setattr(detector, "_grey_below_horizon", lambda colour, horizon, margin_px: as_grey(colour))
+    results.append(acquired_then_tracked(rgb))
+    (first, second), others = results[0], results[1:]
+    assert first.found and second.found and second.mode == "tracking"
+    for other_first, other_second in others:
+        assert _same_detection(first, other_first) and _same_detection(second, other_second)
+
+
+def test_frame_checks_read_the_numbers_numpy_defines():
+    """The contrast spread (a histogram of the sampled levels) and the block grid's steps (integer
+    sums) are np.percentile's and the masked means' numbers."""
+    from visland.detection.detector import _percentile_spread, _sample_rows, block_grid_steps
+    rng = np.random.default_rng(9)
+    for _ in range(50):
+        image = (rng.integers(0, 256, (120, 200)) // int(rng.integers(1, 40))).astype(np.uint8)
+        u0, v0 = (int(x) for x in rng.integers(0, 40, 2))
+        ground = (u0, v0, int(min(200, u0 + rng.integers(17, 170))), int(min(120, v0 + rng.integers(3, 90))))
+        sample = image[ground[1]:ground[3]:4, ground[0]:ground[2]:4]
+        assert _percentile_spread(sample, 1.0, 99.0) == float(np.percentile(sample, 99.0) - np.percentile(sample, 1.0))
+        levels = image[_sample_rows(ground, 32), ground[0]:ground[2]].astype(np.int16)
+        steps = np.abs(np.diff(levels, axis=1))
+        across = (np.arange(ground[0], ground[2] - 1) + 1) % 8 == 0
+        assert block_grid_steps(image, ground) == (float(steps[:, across].mean()), float(steps[:, ~across].mean()))

@@ -127,3 +127,24 @@ def test_remap_inside_reads_the_whole_frames_values(border):
     assert not inside.all() and inside.sum() == 6 * 34 - 1
     np.testing.assert_array_equal(cropped[inside], whole[inside])      # NaN (constant border) included
     assert cropped.dtype == np.float32 and cropped.shape == map_u.shape
+
+
+def test_percentile_of_is_numpys_percentile_to_the_bit():
+    """Float32 and float64 arrays, ties, a NaN, an infinity, the ends and arbitrary percentiles:
+    the same number and type as np.percentile's linear interpolation."""
+    from visland.detection.refine import percentile_of
+    rng = np.random.default_rng(5)
+    for trial in range(600):
+        values = (rng.standard_normal(int(rng.integers(1, 50))) * 10.0 ** rng.integers(-2, 3))
+        values = values.astype(np.float32 if trial % 2 else np.float64)
+        if trial % 5 == 0:
+            values = np.round(values)
+        if trial % 37 == 0:
+            values[0] = np.nan
+        if trial % 41 == 0:
+            values[-1] = np.inf
+        q = (90.0, 0.0, 100.0, 50, 99.0, float(rng.uniform(0.0, 100.0)))[trial % 6]
+        with np.errstate(invalid="ignore"):
+            expected, got = np.percentile(values, q), percentile_of(values, q)
+        assert type(got) is type(expected)
+        assert got == expected or (math.isnan(got) and math.isnan(expected)), (values, q)
