@@ -679,7 +679,9 @@ class DetectorParams(ParamsFile):
         Over a sequence: while two frames of the last ``marking_memory_s`` seconds saw a
         threshold marking inside the pavement (a displaced threshold, a blast pad) the same
         number of runway widths in (within this fraction), a threshold placed where the
-        pavement begins is withheld (:class:`visland.detection.DetectionSequence`).
+        pavement begins is withheld (:class:`visland.detection.DetectionSequence`); while no
+        threshold is followed yet (``threshold_track_s``), one such frame is enough for the
+        frame after it.
     marking_memory_min_widths : float
         ... a marking at least this many runway widths in: nearer, it can be the threshold's own
         marking (stripes from 6 to 36 m in, the designation to about 60 m: 1.3 widths of a 45 m

@@ -33,7 +33,9 @@ once two frames within ``marking_memory_s`` saw one at the same place (runway wi
 pavement within ``marking_memory_agreement`` of each other), a threshold placed where the
 pavement begins is the pavement's start, not the threshold, and its corners are withheld (a
 marking fewer than ``marking_memory_min_widths`` in can be the threshold's own, seen behind a
-band of ground taken for pavement, and is not remembered). Far out the marking is a
+band of ground taken for pavement, and is not remembered). While no threshold is followed yet
+(fewer than three widths in its track), one sighting in the last good frame is enough for the
+next one. Far out the marking is a
 line a fraction of a pixel wide that single frames see only now and then (the robustness
 study's displaced threshold from 3.7 to 2.9 km: seen in one frame of three, the others placed
 the threshold at the pavement's start, 9-10 px before the true one).
@@ -266,8 +268,9 @@ class DetectionSequence:
 
     def _check_pavement_start(self, result: DetectionResult, t_s: float) -> DetectionResult:
         """Withhold a threshold placed where the pavement begins while two frames of the last
-        ``marking_memory_s`` saw a threshold marking the same runway widths inside the pavement
-        (module docstring); remember this frame's marking."""
+        ``marking_memory_s`` saw a threshold marking the same runway widths inside the pavement,
+        or the last good frame did and no threshold is followed yet (module docstring); remember
+        this frame's marking."""
         p = self.params
         seen = [(t, w) for t, w in self.markings_seen if t_s - t <= p.marking_memory_s]
         if result.pavement_marking_widths >= p.marking_memory_min_widths:       # NaN: none seen
@@ -275,8 +278,23 @@ class DetectionSequence:
         self.markings_seen = seen
         if not result.corners_found[:2].any() or result.threshold_method.startswith("marking"):
             return result
-        # the same marking seen twice (a single sighting can be the threshold's own stripes
-        # behind a band of ground taken for pavement: concrete on dry grass at 650 m)
+        tracked = sum(1 for t, _ in self.threshold_track if t_s - p.threshold_track_s <= t < t_s)
+        if tracked < 3 and seen and seen[-1][0] == self.t_good_s:
+            # no threshold followed yet (fewer widths than a track needs) to vouch for the
+            # pavement's start, and the last good frame saw a marking inside it: that one
+            # sighting withholds it (the robustness study's displaced threshold, the first
+            # tracked frame at 3666 m: the bar seen 7.8 widths in once, in the acquisition frame
+            # before, the threshold then put 8.8 px short). Only in the frame after the sighting:
+            # a withheld threshold does not enter the track, and a spurious sighting (a noisy,
+            # compressed frame at 2.3 km) then withheld 44 frames for marking_memory_s
+            t_late, widths = seen[-1]
+            return _without_threshold(result, f"threshold withheld: placed where the pavement begins, but a "
+                                              f"threshold marking {widths:.1f} runway widths inside the pavement "
+                                              f"was seen {t_s - t_late:.1f} s earlier, and no threshold is "
+                                              "followed yet (a displaced threshold?)")
+        # the same marking seen twice (with a threshold followed, a single sighting can be the
+        # threshold's own stripes behind a band of ground taken for pavement: concrete on dry
+        # grass at 650 m)
         for t_late, widths in reversed(seen):
             agreeing = [t for t, w in seen if t != t_late and abs(w - widths) <= p.marking_memory_agreement * widths]
             if agreeing:

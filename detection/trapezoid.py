@@ -485,13 +485,38 @@ def is_convincing_strip(h: RunwayHypothesis, params: DetectorParams) -> bool:
     -------
     bool
     """
+    return _is_one_surface_strip(h, params) and h.evidence.get("ends", 0) >= 1
+
+
+def _is_one_surface_strip(h: RunwayHypothesis, params: DetectorParams) -> bool:
+    """:func:`is_convincing_strip` without its end in view."""
     e = h.evidence
     contrast = max(e.get("contrast", 0.0), 1e-6)
     interior = abs(e.get("interior", 0.0))
     return (interior >= params.strip_min_interior * contrast
             and abs(e.get("outside_gap", math.inf)) <= params.strip_max_outside_gap * max(interior, contrast)
-            and e.get("spread", math.inf) <= params.strip_max_spread * interior    # mostly one surface
-            and e.get("ends", 0) >= 1)
+            and e.get("spread", math.inf) <= params.strip_max_spread * interior)    # mostly one surface
+
+
+def _paved_like(h: RunwayHypothesis, r: RunwayHypothesis, params: DetectorParams) -> bool:
+    """Whether ``r`` is a strip of the same kind of surface as the convincing strip ``h``: a
+    convincing strip itself, or one that passes every test of :func:`is_convincing_strip` but its
+    end in view, whose inside lies on the same side of the ground's grey level as ``h``'s
+    (``inside_minus_ground``, both pavements darker or both brighter than the fields).
+
+    The end is not asked of the wider strip beside a convincing one: a runway seen with a
+    lateral offset of a few widths far out (the robustness study's 'variety 1' at 3.4 km, 22 deg
+    of roll) had its hypothesis a few pixels off to one side, so that no end of it stood out
+    against the ground beside (283 m of pavement before its threshold), while the parallel
+    taxiway 211 m to its right, 23 m wide, showed both ends; the taxiway was measured as the
+    runway (edges 66 px off) for two frames.
+    """
+    if is_convincing_strip(r, params):
+        return True
+    if not _is_one_surface_strip(r, params):
+        return False
+    mine, theirs = h.evidence.get("inside_minus_ground", math.nan), r.evidence.get("inside_minus_ground", math.nan)
+    return bool(math.isfinite(mine) and math.isfinite(theirs) and mine * theirs > 0)
 
 
 def wider_strip_beside(h: RunwayHypothesis, r: RunwayHypothesis, params: DetectorParams) -> bool:
@@ -527,7 +552,9 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], params: Detector
     convincing strips count: a score at least ``params.parallel_score_ratio`` of the other's, an
     inside that differs from the outside as much as the edges say and is mostly one surface
     (``strip_min_interior``, ``strip_max_spread``: a runway's markings spread it), the same ground
-    on both sides (``strip_max_outside_gap``), and an end in view.
+    on both sides (``strip_max_outside_gap``), and an end in view; the wider one may lack the end
+    when its inside lies on the same side of the ground's level as the narrower one's
+    (:func:`_paved_like`).
     """
     def is_strip(h):
         return is_convincing_strip(h, params)
@@ -539,7 +566,8 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], params: Detector
         if is_strip(h):
             width = h.k_right - h.k_left
             rivals = [r for r in remaining
-                      if abs(r.s0 - h.s0) < 1e-6 and r.score >= params.parallel_score_ratio * h.score and is_strip(r)
+                      if abs(r.s0 - h.s0) < 1e-6 and r.score >= params.parallel_score_ratio * h.score
+                      and _paved_like(h, r, params)
                       and _side_by_side(h, r, params.parallel_min_gap * width)
                       and (r.k_right - r.k_left) > params.parallel_min_width_ratio * width]
             if rivals:

@@ -12,29 +12,37 @@ import pytest
 STUDY_FPS = 5.0
 
 
-def _study_frames(scene_overrides: dict, runway_m: tuple, indices, size: int = 1024):
+def _study_frames(scene_overrides: dict, runway_m: tuple, indices, size: int = 1024, variety: int | None = None):
     """The study's frames ``indices`` (thesis-3 flown with the runway, 5 Hz, rendered by visland's
-    renderer with the frame's index as its seed): ``[(rgb, state, labels, t_s)], camera``."""
+    renderer with the frame's seed as the study draws it, :func:`visland.datasets.generate.frame_seed`):
+    ``[(rgb, state, labels, t_s)], camera``. With ``variety`` the runway and the scene are the
+    study's 'variety N' (:func:`visland.render.variety.draw_variety`) and the other two are ignored."""
     import os
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from visland.camera import CameraModel
+    from visland.datasets.generate import frame_seed
     from visland.features import batch_R_camera_from_runway, ideal_features
     from visland.flight import simulate_flight
     from visland.render import FrameRenderer, SceneParams
+    from visland.render.variety import draw_variety
     from visland.runway import Runway
     from visland.scenarios import resolve_scenario, with_runway
     from visland.simulate import frame_times
 
-    runway = Runway(length_m=runway_m[0], width_m=runway_m[1])
+    if variety is not None:
+        drawn = draw_variety(variety)
+        runway, scene = Runway(length_m=drawn.runway_length_m, width_m=drawn.runway_width_m), drawn.scene
+    else:
+        runway, scene = Runway(length_m=runway_m[0], width_m=runway_m[1]), SceneParams(**scene_overrides)
     trajectory = simulate_flight(with_runway(resolve_scenario("thesis-3"), runway))
     times = frame_times(trajectory.duration_s, STUDY_FPS)
     camera = CameraModel.default(size)
     frames = []
-    with FrameRenderer(SceneParams(**scene_overrides), camera, runway) as renderer:
+    with FrameRenderer(scene, camera, runway) as renderer:
         for index in indices:
             state = trajectory.at(times[index:index + 1])
             R = batch_R_camera_from_runway(state.roll_rad, state.pitch_rad, state.dpsi_rad, camera.mount_rpy_rad)
-            rgb = renderer.render(state.p_runway_m[0], R[0], frame_seed=index)
+            rgb = renderer.render(state.p_runway_m[0], R[0], frame_seed=frame_seed(scene.seed, index))
             frames.append((rgb, state, ideal_features(state, runway, camera), float(times[index])))
     return frames, camera
 
@@ -154,3 +162,48 @@ def test_a_centre_line_or_a_side_stripe_is_not_a_runway_edge():
     why = _balance(image, 98.5, 139.5)
     assert "does not change alike" in why and "grey +0.0 / +40.0" in why, why
     assert "does not change alike" in _balance(image, 59.5, 61.5)
+
+
+@pytest.mark.slow
+def test_a_runway_seen_offset_is_preferred_to_the_parallel_taxiway_that_shows_both_ends():
+    """variety 1 (2422 x 52 m, 283 m of pavement before the threshold, urban, taxiways near the
+    threshold), 3378 m before the threshold, 22 deg of roll, the runway about one height to the
+    left: its hypothesis lay a few pixels off to one side and showed no end against the ground,
+    so it was no convincing strip, while the parallel taxiway 211 m to its right (23 m wide)
+    showed both ends and was measured as the runway (edges 66 px off; then tracked one frame:
+    near corners 85 px off). A wider strip of the same kind of surface beside a convincing one
+    goes first without an end in view: the runway is found here."""
+    from visland.detection import detect_runway
+    [(rgb, state, labels, _)], camera = _study_frames({}, (0.0, 0.0), [21], variety=1)
+    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    errors = _errors(result, camera, state, labels)
+    assert not errors["gross"], (errors, result.reason)
+    assert result.found, result.reason
+    assert errors["edge_px"] < 2.0, errors          # the largest distance along the edge (1.2 px here)
+
+
+def _hypothesis(k_left, k_right, score, ends, inside_minus_ground, spread=6.0):
+    from visland.detection.trapezoid import RunwayHypothesis
+    return RunwayHypothesis(s0=211.8, k_left=k_left, k_right=k_right, d_far=45.0, d_near=61.0, polarity_left=-1,
+                            polarity_right=1, score=score, centre_polarity=0, centre_support=0.0,
+                            evidence={"contrast": 5.5, "interior": -8.1, "outside_gap": 1.6, "spread": spread,
+                                      "ends": ends, "inside_minus_ground": inside_minus_ground})
+
+
+@pytest.mark.parametrize("inside_minus_ground, spread, runway_first", [
+    (-8.2, 6.0, True),          # the same kind of surface as the taxiway (darker than the fields)
+    (+8.2, 6.0, False),         # brighter than the fields where the taxiway is darker: not a pavement like it
+    (-8.2, 30.0, False),        # not one surface (its inside spread over 1.5 times its step)
+])
+def test_a_wider_strip_beside_a_convincing_one_goes_first_without_an_end_in_view(inside_minus_ground, spread,
+                                                                                 runway_first):
+    """The hypotheses of 'variety 1' at 3378 m (evidence as measured there): the parallel taxiway
+    (k 0.05 to 0.18, both ends in view, score 0.78) and the runway beside it, 2.2 times as wide
+    (k -1.20 to -0.92, no end in view, score 0.35). The runway goes first when its inside is one
+    surface on the same side of the ground's level as the taxiway's."""
+    from visland.detection.params import DetectorParams
+    from visland.detection.trapezoid import _prefer_widest_parallel
+    taxiway = _hypothesis(0.048, 0.176, 0.777, 2, -10.8)
+    runway = _hypothesis(-1.202, -0.915, 0.352, 0, inside_minus_ground, spread)
+    ordered = _prefer_widest_parallel([taxiway, runway], DetectorParams())
+    assert (ordered[0] is runway) == runway_first

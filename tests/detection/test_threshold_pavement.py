@@ -123,9 +123,11 @@ def test_the_pavement_start_is_withheld_once_a_marking_was_seen_twice_inside_the
     threshold where the pavement begins (9-10 px before it at 1024 px). Once two frames within
     ``marking_memory_s`` saw the marking the same number of widths in, those are withheld; a
     frame that places the threshold on the marking keeps it; a single sighting (the threshold's
-    own stripes behind ground taken for pavement) or none leaves the pavement's start."""
+    own stripes behind ground taken for pavement) or none leaves the pavement's start, once a
+    threshold is followed (three frames placed it before)."""
     import visland.detection.sequence as seq_module
-    frames = iter([_found(20.0, "chroma"),                            # nothing seen: kept
+    frames = iter([_found(20.0, "chroma"), _found(20.0, "chroma"), _found(20.0, "chroma"),   # a track
+                   _found(20.0, "chroma"),                            # nothing seen: kept
                    _found(20.0, "", marking_widths=7.2),              # a marking seen, not placed (withheld)
                    _found(20.2, "chroma"),                            # seen once: kept
                    _found(20.4, "", marking_widths=6.9),              # seen again, the same place
@@ -138,6 +140,44 @@ def test_the_pavement_start_is_withheld_once_a_marking_was_seen_twice_inside_the
     camera = CameraModel.default(1024)
     params = replace(DetectorParams(), marking_memory_s=1.0)
     sequence = DetectionSequence(camera, params)
-    times = [0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 2.5, 2.7]
+    times = [-0.6, -0.4, -0.2, 0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 2.5, 2.7]
     kept = [bool(sequence(np.zeros((8, 8), np.uint8), 0.0, 0.0, t).corners_found[:2].all()) for t in times]
-    assert kept == [True, False, True, False, False, True, False, False, True]
+    assert kept == [True, True, True, True, False, True, False, False, True, False, False, True]
+
+
+def test_a_single_sighting_withholds_the_pavement_start_while_no_threshold_is_followed(monkeypatch):
+    """The robustness study's displaced threshold (1024 px, 3.7 km): the acquisition frame saw
+    the bar 7.8 runway widths inside the pavement and withheld its threshold; the next frame did
+    not see the bar and placed the threshold where the pavement begins, 8.8 px before the true
+    one. With no threshold followed yet, that one sighting withholds it in the next frame only (a
+    withheld threshold does not enter the track: a spurious sighting in a noisy frame would
+    otherwise withhold every frame for marking_memory_s)."""
+    import visland.detection.sequence as seq_module
+    frames = iter([_found(20.0, "", marking_widths=7.8),              # acquisition: the bar seen once
+                   _found(20.0, "chroma"),                            # the pavement's start: withheld
+                   _found(20.0, "chroma"),                            # the sighting 2 frames old: kept
+                   _found(20.0, "marking-bar", marking_widths=7.5),   # on the bar: kept
+                   _found(20.1, "marking-bar", marking_widths=7.4),
+                   _found(20.2, "marking-bar", marking_widths=7.6),
+                   _found(20.3, "chroma")])                           # sightings agree: withheld
+    monkeypatch.setattr(seq_module, "detect_runway", lambda *a, **k: next(frames))
+    sequence = DetectionSequence(CameraModel.default(1024), DetectorParams())
+    results = [sequence(np.zeros((8, 8), np.uint8), 0.0, 0.0, t) for t in (0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2)]
+    kept = [bool(r.corners_found[:2].all()) for r in results]
+    assert kept == [False, False, True, True, True, True, False]
+    assert all(r.found for r in results)
+    assert "no threshold is followed yet" in results[1].reason
+
+
+def test_with_a_threshold_followed_one_sighting_leaves_the_pavement_start(monkeypatch):
+    """Three thresholds placed (a track), then one sighting of a marking inside the pavement
+    (the threshold's own stripes behind a band of ground taken for pavement): the pavement's
+    start placed next is kept."""
+    import visland.detection.sequence as seq_module
+    frames = iter([_found(20.0, "chroma"), _found(20.1, "chroma"), _found(20.2, "chroma"),
+                   _found(20.3, "", marking_widths=2.5),
+                   _found(20.4, "chroma")])
+    monkeypatch.setattr(seq_module, "detect_runway", lambda *a, **k: next(frames))
+    sequence = DetectionSequence(CameraModel.default(1024), DetectorParams())
+    results = [sequence(np.zeros((8, 8), np.uint8), 0.0, 0.0, t) for t in (0.0, 0.2, 0.4, 0.6, 0.8)]
+    assert [bool(r.corners_found[:2].all()) for r in results] == [True, True, True, False, True]
