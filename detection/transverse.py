@@ -395,9 +395,8 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     (or, without one, ``d_expected``) and the outer end of a marking band.
 
     In grey levels the boundary is the outermost departure from the ground's level
-    (:meth:`_StepProfile.ground_exit`), placed by a fit of the blurred ground / surface /
-    marking model (:func:`_fit_boundary`) with the runway's own surface level
-    ``surface_level`` (from :func:`surface_extent`) when it is known.
+    (:meth:`_StepProfile.ground_departures`), placed where the profile crosses halfway between
+    the ground's line and the first extreme inside.
 
     Returns None when no step stands out of the profile's noise by ``min_significance`` or
     reaches a quarter of ``min_step`` grey levels per pixel (in grey and in chroma).
@@ -738,58 +737,6 @@ def _spans_width(values, inside, rows_ok, fractions, depths, outward, depth, lev
         if not ok:
             return False
     return True
-
-
-def _fit_boundary(profile: "_StepProfile", outward: int, d_exit: float,
-                  before_px: float = 3.0, after_px: float = 4.0) -> float | None:
-    """Sub-pixel boundary depth from a fit of a blurred ground / band / surface model.
-
-    With ``u = (d - d_exit) * outward`` (positive outside the runway), the profile near the
-    boundary is modelled as
-
-        p(u) = G(u) + (L1 - G(u)) S(u1 - u) + (L2 - L1) S(u1 - w - u),   S(x) = Phi(x / sigma)
-
-    ground ``G(u) = g0 + g1 u`` (a local trend: haze and large-scale texture), then from the
-    boundary ``u1`` inwards a band of level ``L1`` and width ``w``, then level ``L2``, all blurred
-    by a Gaussian of ``sigma``. The band is the bare surface before the threshold stripes where
-    those begin 6 m inside (ICAO) and are resolved, or the stripes themselves where they are not:
-    the two cases differ only in which of ``L1``, ``L2`` is brighter, so one model serves both.
-    Where the band is a pixel or less wide, a half-level rule lands between its two flanks; the
-    fit keeps ``u1`` at the ground's end. Returns None when the fit does not converge with
-    ``u1`` inside the window.
-    """
-    from scipy.optimize import least_squares
-    from scipy.special import ndtr
-
-    valid = np.isfinite(profile.raw)
-    u_all = (profile.depths - d_exit) * outward
-    window = valid & (u_all >= -after_px) & (u_all <= before_px)
-    if window.sum() < 10:
-        return None
-    u, p = u_all[window], profile.raw[window]
-    outside, band, inside = u > 0.75, (u <= 0.5) & (u >= -1.0), u < -2.0
-    if outside.sum() < 2 or inside.sum() < 2 or band.sum() < 1:
-        return None
-    g0 = float(median_of(p[outside]))
-    level1 = float(p[band][np.argmax(np.abs(p[band] - g0))])
-    level2 = float(median_of(p[inside]))
-
-    def model(x):
-        b0, b1, l1, l2, u1, w, sigma = x
-        ground = b0 + b1 * u
-        return ground + (l1 - ground) * ndtr((u1 - u) / sigma) + (l2 - l1) * ndtr((u1 - w - u) / sigma)
-
-    x0 = [g0, 0.0, level1, level2, 0.0, 1.0, 0.7]
-    lower = [-np.inf, -np.inf, -np.inf, -np.inf, -1.5, 0.0, 0.3]
-    upper = [np.inf, np.inf, np.inf, np.inf, 1.5, after_px, 2.0]
-    try:
-        fit = least_squares(lambda x: model(x) - p, x0, bounds=(lower, upper), method="trf", max_nfev=300)
-    except ValueError:
-        return None
-    u1 = float(fit.x[4])
-    if not (fit.success and -1.5 < u1 < 1.5):
-        return None
-    return d_exit + outward * u1
 
 
 def _depth_profile(patch, maps, inside, rows_ok, texture: bool = False):
