@@ -661,20 +661,16 @@ class DetectorParams(ParamsFile):
         A threshold whose width differs from the track's prediction by more than
         ``threshold_width_tolerance_px + threshold_width_tolerance_fraction * predicted width``
         is not the threshold followed so far (a marking, a joining pavement): its corners are
-        withheld.
+        withheld. (A tolerance widened by three standard errors of the track's own scatter was
+        tried, a614eae, and removed: it kept correct thresholds at 512 px, 3-6 % off the
+        prediction, and let through 5 gross ones in the robustness study's 'snow, monochrome',
+        6-7 % off, 5-8 px wrong; the width cannot tell the two apart.)
     threshold_shrink_memory_s : float
         Over a sequence, where the track holds fewer than three widths: a threshold narrower
         than the last one accepted in the last this many seconds, by more than the tolerance
         above, is withheld: flying toward the threshold its width ``f W / depth`` only grows.
         (Against the widest of the memory instead, the noisy frames of the robustness study's
         'sensor' condition lost 44 correct thresholds to one high width.)
-    threshold_width_noise_sigmas : float
-        The tolerance above also grows by this many times the prediction's relative standard
-        error (the track's own scatter about its fitted line, from five samples on), times the
-        predicted width. At 512 px the widths scatter by 1-2 % near 100 ft and a fixed 4 %
-        withheld correct thresholds (thesis-8 at 61.6 s: 3.4 % over the true width, the
-        prediction 1.7 % under it); on 2048 px colour frames they scatter by a few tenths of a
-        per cent and the tolerance hardly moves. 0 turns it off.
     marking_memory_s, marking_memory_agreement : float
         Over a sequence: while two frames of the last ``marking_memory_s`` seconds saw a
         threshold marking inside the pavement (a displaced threshold, a blast pad) the same
@@ -954,7 +950,6 @@ class DetectorParams(ParamsFile):
     threshold_track_s: float = 2.0
     threshold_width_tolerance_px: float = 2.0
     threshold_width_tolerance_fraction: float = 0.04
-    threshold_width_noise_sigmas: float = 3.0
     threshold_shrink_memory_s: float = 5.0
     marking_memory_s: float = 10.0
     marking_memory_agreement: float = 0.25
@@ -1082,7 +1077,7 @@ class DetectorParams(ParamsFile):
         "static_max_motion_ratio": (0.0, 1.0), "identity_memory_s": (0.0, 600.0), "identity_k_tolerance": (0.0, 100.0), "identity_k_rate": (0.0, 100.0),
         "identity_width_tolerance": (0.0, 100.0), "identity_width_rate": (0.0, 100.0),
         "threshold_width_tolerance_px": (0.0, 1000.0), "threshold_width_tolerance_fraction": (0.0, 10.0),
-        "threshold_width_noise_sigmas": (0.0, 100.0), "threshold_shrink_memory_s": (0.0, 600.0),
+        "threshold_shrink_memory_s": (0.0, 600.0),
         "marking_memory_s": (0.0, 3600.0), "marking_memory_agreement": (0.0, 10.0),
         "marking_memory_min_widths": (0.0, 1000.0), "reference_rate_hz": (0.1, 10000.0),
         "reference_side_px": (16, 100000, "int"), "reference_focal_px": (1.0, 1e6),

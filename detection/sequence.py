@@ -16,9 +16,7 @@ that jump since the prior (the touchdown-zone bars taken for the threshold for o
 dropped from an otherwise good detection (``max_threshold_jump_*``). The threshold is also
 followed as a track: at a steady ground speed the reciprocal of its width in pixels,
 ``1 / w = x / (f W)``, falls linearly with time whatever the height, so the widths of the last
-``threshold_track_s`` seconds predict the next one, within a tolerance that grows with the
-widths' own scatter about the track (a noisy low-resolution track must not withhold its correct
-frames); a threshold off that prediction (a marking
+``threshold_track_s`` seconds predict the next one; a threshold off that prediction (a marking
 or a pavement joining the runway taken for it) has its corners withheld, and three rejections in
 a row that agree with each other start the track afresh. Flying toward the threshold its
 width only grows: where the track holds fewer than three widths, one narrower than the last
@@ -328,8 +326,7 @@ class DetectionSequence:
         p = self.params
         track = [(t, w) for t, w in self.threshold_track if t_s - p.threshold_track_s <= t < t_s]
         self.threshold_track = track
-        predicted, scatter = _width_prediction(track, t_s) if len(track) >= 3 else (math.nan, 0.0)
-        spread = p.threshold_width_tolerance_fraction + p.threshold_width_noise_sigmas * scatter
+        spread = p.threshold_width_tolerance_fraction
         # flying toward it, the threshold's width (f W / depth) only grows: where the track is too
         # short to predict, a threshold narrower than the last one accepted in the last seconds is
         # something farther along the runway (a marking, seen once the threshold has left the
@@ -343,6 +340,10 @@ class DetectionSequence:
                                                   "toward the threshold its width only grows)")
         self.threshold_widths.append((t_s, width))
         if len(track) >= 3:
+            times = np.array([t for t, _ in track])
+            inverse = np.array([1.0 / w for _, w in track])
+            slope, offset = np.polyfit(times - t_s, inverse, 1)
+            predicted = 1.0 / offset if offset > 0 else math.inf
             tolerance = p.threshold_width_tolerance_px + spread * predicted
             if not abs(width - predicted) <= tolerance:
                 rejected = [(t, w) for t, w in self.threshold_rejected if t_s - p.threshold_track_s <= t < t_s]
@@ -440,33 +441,6 @@ def _edges_crossing(result: DetectionResult, camera: CameraModel):
         return None
     uv = camera.normalized_to_pixels(xy)
     return uv if camera.in_image(uv, margin_px=-max(camera.width, camera.height)) else None
-
-
-def _width_prediction(track: list, t_s: float) -> tuple[float, float]:
-    """``(predicted, scatter)``: the threshold's width at ``t_s`` from a line fitted to the
-    track's ``(t, width)`` samples in ``1 / width`` (module docstring), and the prediction's
-    relative standard error as a new measurement would differ from it.
-
-    The widths' own relative noise ``s`` is read off the fit's residuals robustly (1.4826 times
-    their median absolute value, times ``sqrt(n / (n - 2))`` for the two fitted coefficients; 0
-    below five samples, where it cannot be told from the fit): one bad width in the track (a
-    threshold 5 % off, seen on a 512 px approach) must not widen the gate for the next one. A
-    new width differs
-    from the line at ``t_s`` by ``s sqrt(1 + 1/n + (t_s - mean t)^2 / S_tt)`` (the textbook
-    prediction interval of a straight-line fit, ``S_tt`` the times' sum of squared deviations).
-    In ``1 / w`` a relative error ``e`` of the width is ``-e / w``: residuals times the widths
-    are relative errors."""
-    times = np.array([t for t, _ in track]) - t_s
-    widths = np.array([w for _, w in track])
-    slope, offset = np.polyfit(times, 1.0 / widths, 1)
-    predicted = 1.0 / offset if offset > 0 else math.inf
-    n = len(track)
-    if n < 5 or not math.isfinite(predicted):
-        return predicted, 0.0
-    relative = (1.0 / widths - (slope * times + offset)) * widths
-    noise = 1.4826 * float(np.median(np.abs(relative))) * math.sqrt(n / (n - 2))
-    spread = float(np.sum((times - times.mean()) ** 2))
-    return predicted, noise * math.sqrt(1.0 + 1.0 / n + times.mean() ** 2 / spread)
 
 
 def _consistent(samples: list, params: DetectorParams) -> bool:

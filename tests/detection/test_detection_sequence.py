@@ -116,45 +116,6 @@ def test_the_threshold_track_withholds_a_threshold_off_its_width(scripted):
     assert all(r.corners_found[:2].all() for r in results[6:])
 
 
-def test_the_width_prediction_error_matches_the_tracks_own_scatter():
-    # closed-form widths with 1.5 % seeded relative noise (the 512 px videos near 100 ft): the
-    # prediction's standard error, read off the residuals, must describe how far the next true
-    # measurement falls from the prediction
-    rng = np.random.default_rng(7)
-    exact = _widths_of_an_approach(11)
-    misses, scatters = [], []
-    for _ in range(400):
-        noisy = exact * (1.0 + 0.015 * rng.standard_normal(exact.size))
-        track = [(0.2 * i, w) for i, w in enumerate(noisy[:10])]
-        predicted, scatter = seq_module._width_prediction(track, 2.0)
-        misses.append((noisy[10] - predicted) / predicted / scatter)
-        scatters.append(scatter)
-    assert np.median(scatters) == pytest.approx(0.015 * np.sqrt(1 + 1 / 10 + 1.1 ** 2 / 8.25), rel=0.15)
-    assert np.std(misses) == pytest.approx(1.0, abs=0.2)
-    # fewer than five samples: no scatter to read
-    assert seq_module._width_prediction([(0.0, 50.0), (0.2, 52.0), (0.4, 54.5), (0.6, 56.9)], 0.8)[1] == 0.0
-
-
-def test_a_noisy_track_keeps_its_correct_thresholds_and_still_withholds_a_taxiway(scripted):
-    # widths scattering by 1.5 % (a 512 px video): frame 10 is the true threshold measured 3.4 %
-    # wide, the prediction from the noisy track lands under it (thesis-8 at 61.6 s); a fixed 4 %
-    # tolerance withholds it, the track's own scatter keeps it. A taxiway 250 m past the
-    # threshold (35 % narrower at 460 m) is withheld either way.
-    exact = _widths_of_an_approach(12, x0_m=600.0)
-    noise = np.array([0.0, 0.015, -0.015, 0.0, 0.015, -0.015, 0.015, -0.015, -0.02, -0.02, 0.034, 0.0])
-    measured = exact * (1.0 + noise)
-    for sigmas, kept in ((3.0, True), (0.0, False)):
-        scripted([_result(width=w) for w in measured])
-        params = replace(DetectorParams(), threshold_width_noise_sigmas=sigmas)
-        results = _run(seq_module.DetectionSequence(CAMERA, params=params), 12, dt=0.2)
-        assert bool(results[10].corners_found[:2].all()) == kept, results[10].reason
-    taxiway = CAMERA.fx * 40.0 / (600.0 - 70.0 * 0.2 * 10 + 250.0)
-    scripted([_result(width=w) for w in measured[:10]] + [_result(width=taxiway), _result(width=measured[11])])
-    results = _run(seq_module.DetectionSequence(CAMERA), 12, dt=0.2)
-    assert not results[10].corners_found[:2].any() and "threshold withheld" in results[10].reason
-    assert results[11].corners_found[:2].all()
-
-
 def test_a_threshold_narrower_than_one_just_accepted_is_withheld(scripted):
     # 512 px, 60 ft: the threshold seen in two frames (392 and 444 px wide, too few for a track),
     # then gone below the frame, then the touchdown zone's bars taken for it, 162 px wide
