@@ -235,18 +235,16 @@ def rectify(image, horizon: HorizonFrame, s0: float, k_range: tuple, d_range: tu
     # much smaller than one box around the wedge of samples (half the frame for a far runway).
     # (through a FloatFrame, the whole box is asked for once and the bands are views of it)
     ends_u, ends_v = u[:, [0, -1]], v[:, [0, -1]]
-    whole = None
-    if isinstance(image, FloatFrame):
-        whole = _crop_box(ends_u, ends_v, width, height)
-        whole_crop = image.crop(*whole)
+    framed = isinstance(image, FloatFrame)
+    if framed:
+        image.crop(*_crop_box(ends_u, ends_v, width, height))
     values = np.empty(u.shape, np.float32)
     for band in np.array_split(np.arange(n_rows), min(n_rows, RECTIFY_BANDS)):
         rows = slice(int(band[0]), int(band[-1]) + 1)
         u0, v0, u1, v1 = _crop_box(ends_u[rows], ends_v[rows], width, height)
         if u1 - u0 < 2 or v1 - v0 < 2:
             continue                          # no sample of the band inside the frame
-        crop = (np.asarray(image[v0:v1, u0:u1], dtype=np.float32) if whole is None
-                else whole_crop[v0 - whole[1]:v1 - whole[1], u0 - whole[0]:u1 - whole[0]])
+        crop = image.crop(u0, v0, u1, v1) if framed else np.asarray(image[v0:v1, u0:u1], dtype=np.float32)
         map_u = np.where(inside[rows], u[rows] - np.float32(u0), np.float32(-10.0))
         map_v = np.where(inside[rows], v[rows] - np.float32(v0), np.float32(-10.0))
         values[rows] = cv2.remap(crop, map_u, map_v, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)

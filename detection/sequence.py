@@ -99,7 +99,7 @@ class DetectionSequence:
         self.t_good_s: float | None = None
         self.threshold_track: list[tuple[float, float]] = []      # (t_s, width_px) accepted
         self.threshold_rejected: list[tuple[float, float]] = []   # rejected in a row
-        self.threshold_widths: list[tuple[float, float]] = []     # (t_s, width_px) accepted, shrink memory
+        self.last_threshold: tuple[float, float] | None = None     # (t_s, width_px) last accepted
         self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
         self.identity: tuple | None = None                        # (t_s, k_centre, width_ratio) last accepted
         self.recent: list[tuple[float, DetectionResult]] = []     # found, within static_window_s
@@ -111,7 +111,7 @@ class DetectionSequence:
         self.t_good_s = None
         self.threshold_track = []
         self.threshold_rejected = []
-        self.threshold_widths = []
+        self.last_threshold = None
         self.image_attitude = None
         self.identity = None
         self.recent = []
@@ -276,8 +276,7 @@ class DetectionSequence:
         self.markings_seen = seen
         if not result.corners_found[:2].any() or result.threshold_method.startswith("marking"):
             return result
-        tracked = sum(1 for t, _ in self.threshold_track if t_s - p.threshold_track_s <= t < t_s)
-        if tracked < 3 and seen and seen[-1][0] == self.t_good_s:
+        if len(self._recent_track(t_s)) < 3 and seen and seen[-1][0] == self.t_good_s:
             # no threshold followed yet (fewer widths than a track needs) to vouch for the
             # pavement's start, and the last good frame saw a marking inside it: that one
             # sighting withholds it (the robustness study's displaced threshold, the first
@@ -324,27 +323,23 @@ class DetectionSequence:
             return result
         width = float(np.hypot(*(result.corners_uv[1] - result.corners_uv[0])))
         p = self.params
-        track = [(t, w) for t, w in self.threshold_track if t_s - p.threshold_track_s <= t < t_s]
-        self.threshold_track = track
-        spread = p.threshold_width_tolerance_fraction
+        track = self.threshold_track = self._recent_track(t_s)
         # flying toward it, the threshold's width (f W / depth) only grows: where the track is too
         # short to predict, a threshold narrower than the last one accepted in the last seconds is
         # something farther along the runway (a marking, seen once the threshold has left the
         # frame below)
-        self.threshold_widths = [(t, w) for t, w in self.threshold_widths if t_s - p.threshold_shrink_memory_s <= t < t_s]
-        if self.threshold_widths and len(track) < 3:
-            t_last, last = self.threshold_widths[-1]
-            if width < last - p.threshold_width_tolerance_px - spread * last:
+        if len(track) < 3 and self.last_threshold is not None:
+            t_last, last = self.last_threshold
+            if t_s - p.threshold_shrink_memory_s <= t_last < t_s and width < last - _width_tolerance(p, last):
                 return _without_threshold(result, f"threshold withheld: {width:.1f} px wide, narrower than the "
                                                   f"{last:.1f} px accepted {t_s - t_last:.1f} s earlier (flying "
                                                   "toward the threshold its width only grows)")
-        self.threshold_widths.append((t_s, width))
         if len(track) >= 3:
             times = np.array([t for t, _ in track])
             inverse = np.array([1.0 / w for _, w in track])
             slope, offset = np.polyfit(times - t_s, inverse, 1)
             predicted = 1.0 / offset if offset > 0 else math.inf
-            tolerance = p.threshold_width_tolerance_px + spread * predicted
+            tolerance = _width_tolerance(p, predicted)
             if not abs(width - predicted) <= tolerance:
                 rejected = [(t, w) for t, w in self.threshold_rejected if t_s - p.threshold_track_s <= t < t_s]
                 rejected.append((t_s, width))
@@ -353,13 +348,18 @@ class DetectionSequence:
                     # the track itself was the wrong object (or the runway was lost and found again)
                     self.threshold_track = rejected
                     self.threshold_rejected = []
+                    self.last_threshold = (t_s, width)
                     return result
-                self.threshold_widths.pop()
                 return _without_threshold(result, f"threshold withheld: {width:.1f} px wide where its track "
                                                   f"predicts {predicted:.1f} px (tolerance {tolerance:.1f})")
         self.threshold_rejected = []
         self.threshold_track = track + [(t_s, width)]
+        self.last_threshold = (t_s, width)
         return result
+
+    def _recent_track(self, t_s: float) -> list:
+        """The threshold track's widths of the ``threshold_track_s`` seconds before ``t_s``."""
+        return [(t, w) for t, w in self.threshold_track if t_s - self.params.threshold_track_s <= t < t_s]
 
     def _inconsistency(self, result: DetectionResult, prior: DetectionResult, dt: float) -> str:
         p = self.params
@@ -443,11 +443,16 @@ def _edges_crossing(result: DetectionResult, camera: CameraModel):
     return uv if camera.in_image(uv, margin_px=-max(camera.width, camera.height)) else None
 
 
+def _width_tolerance(params: DetectorParams, width):
+    """How far a threshold's width may be from the one expected (``threshold_width_tolerance_*``)."""
+    return params.threshold_width_tolerance_px + params.threshold_width_tolerance_fraction * width
+
+
 def _consistent(samples: list, params: DetectorParams) -> bool:
     """Do ``(t, width)`` samples follow one line in ``1 / width`` (a track of their own)?"""
     times = np.array([t for t, _ in samples])
     widths = np.array([w for _, w in samples])
     slope, offset = np.polyfit(times - times[-1], 1.0 / widths, 1)
     fitted = 1.0 / (slope * (times - times[-1]) + offset)
-    tolerance = params.threshold_width_tolerance_px + params.threshold_width_tolerance_fraction * widths
+    tolerance = _width_tolerance(params, widths)
     return bool(np.all(np.abs(fitted - widths) <= tolerance))

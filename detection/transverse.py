@@ -724,10 +724,10 @@ def _spans_width(values, inside, rows_ok, fractions, depths, outward, depth, lev
     reference = [_transition(level_profile, depths, depth, outward),
                  _transition(texture_profile, depths, depth, outward)]
     for columns in np.array_split(np.arange(len(fractions)), n_parts):
-        part = slice(int(columns[0]), int(columns[-1]) + 1)
-        sub_rows = rows_ok & (np.count_nonzero(inside[:, part], axis=1) >= 0.5 * len(columns))
+        span = slice(int(columns[0]), int(columns[-1]) + 1)
+        sub_rows = rows_ok & (np.count_nonzero(inside[:, span], axis=1) >= 0.5 * len(columns))
         # (the part's columns alone: values are NaN outside ``inside`` already)
-        level, spread = _profiles_of(values[:, part], sub_rows, texture=True)
+        level, spread = _profiles_of(values[:, span], sub_rows, texture=True)
         ok = False
         for whole, part_profile in zip(reference, (level, spread)):
             part = _transition(part_profile, depths, depth, outward)

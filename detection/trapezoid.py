@@ -511,10 +511,10 @@ def _paved_like(h: RunwayHypothesis, r: RunwayHypothesis, params: DetectorParams
     taxiway 211 m to its right, 23 m wide, showed both ends; the taxiway was measured as the
     runway (edges 66 px off) for two frames.
     """
-    if is_convincing_strip(r, params):
-        return True
     if not _is_one_surface_strip(r, params):
         return False
+    if r.evidence.get("ends", 0) >= 1:
+        return True
     mine, theirs = h.evidence.get("inside_minus_ground", math.nan), r.evidence.get("inside_minus_ground", math.nan)
     return bool(math.isfinite(mine) and math.isfinite(theirs) and mine * theirs > 0)
 
