@@ -102,6 +102,7 @@ class DetectionSequence:
         self.last_threshold: tuple[float, float] | None = None     # (t_s, width_px) last accepted
         self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
         self.identity: tuple | None = None                        # (t_s, k_centre, width_ratio) last accepted
+        self.identity_history: list[tuple[float, float]] = []    # (t_s, k_centre) accepted, identity_rate_window_s
         self.recent: list[tuple[float, DetectionResult]] = []     # found, within static_window_s
         self.markings_seen: list[tuple[float, float]] = []        # (t_s, widths): markings inside the pavement
 
@@ -114,6 +115,7 @@ class DetectionSequence:
         self.last_threshold = None
         self.image_attitude = None
         self.identity = None
+        self.identity_history = []
         self.recent = []
         self.markings_seen = []
 
@@ -162,6 +164,9 @@ class DetectionSequence:
             geometry = _ground_geometry(result, self.camera)
             if geometry is not None:
                 self.identity = (float(t_s),) + geometry
+                window = self.params.identity_rate_window_s
+                self.identity_history = [(t, k) for t, k in self.identity_history if float(t_s) - t <= window]
+                self.identity_history.append((float(t_s), geometry[0]))
         return result
 
     def _check_moves_with_scene(self, result: DetectionResult, t_s: float) -> DetectionResult:
@@ -203,6 +208,7 @@ class DetectionSequence:
         dt = t_s - t_then
         if dt > p.identity_memory_s:
             return result
+        k_then += self._k_rate() * dt
         why = _identity_mismatch(result, self.camera, k_then, width_then, dt, p)
         if not why:
             return result
@@ -226,10 +232,30 @@ class DetectionSequence:
         if self.identity is None:
             return result
         _, k_then, _ = self.identity
+        k_then += self._k_rate() * dt
         why = _identity_mismatch(result, self.camera, k_then, math.nan, dt, self.params)
         if not why:
             return result
         return _refused(result, f"{why} ({result.mode} picked another object parallel to the runway)")
+
+    def _k_rate(self) -> float:
+        """The rate of the centre line's ``k_C`` (per second) to carry the remembered one forward:
+        the slope of a line through the accepted frames' ``k_C`` of ``identity_rate_window_s``,
+        shrunk toward zero against a prior of one sigma ``identity_k_rate``, ``r sigma_p^2 /
+        (sigma_p^2 + se^2)`` with ``se`` the slope's standard error from the line's own residuals
+        (zero with fewer than four frames or less than a second of history)."""
+        if len(self.identity_history) < 4:
+            return 0.0
+        times = np.array([t for t, _ in self.identity_history])
+        slopes = np.array([k for _, k in self.identity_history])
+        spread = float(np.sum((times - times.mean()) ** 2))
+        if times[-1] - times[0] < 1.0 or spread <= 0.0:
+            return 0.0
+        rate, offset = np.polyfit(times - times[-1], slopes, 1)
+        residual = slopes - (rate * (times - times[-1]) + offset)
+        standard_error_sq = float(np.sum(residual ** 2)) / (len(times) - 2) / spread
+        prior_sq = self.params.identity_k_rate ** 2
+        return float(rate) * prior_sq / (prior_sq + standard_error_sq)
 
     def _detect_without_attitude(self, image, prior: DetectionResult | None) -> DetectionResult:
         """The horizon from the frame, moved through the runway's vanishing point when found.

@@ -243,3 +243,38 @@ def test_a_runway_that_does_not_move_with_the_scene_is_refused(monkeypatch, fixe
         assert "fixed to the camera" in outcomes[1].reason
     else:
         assert all(r.found for r in outcomes), [r.reason for r in outcomes]
+
+
+@pytest.mark.parametrize("beside_m", [0.0, 110.0])
+def test_a_reacquisition_is_checked_where_the_runway_has_moved_since(monkeypatch, beside_m):
+    """thesis-8 aligns with the runway at 22 m/s from 220 m up: k_C = Y / h falls 0.1 per second,
+    twice the fixed rate. The runway followed from 8.6 to 11.8 s, lost for 5 s and found again
+    at 17 s is where the rate of k_C carried forward puts it (refused without the rate, as the
+    512 px H.264 recording of thesis-8 was for 11 s); a strip 110 m beside it is still refused."""
+    from visland.flight import simulate_flight
+    from visland.scenarios import get_scenario
+    scenario = get_scenario("thesis-8")
+    states = simulate_flight(scenario)
+    camera = CameraModel.from_fov(1024, 1024, 60.0, (0.0, -5.0, 0.0))
+    step = int(round(0.2 / (states.t_s[1] - states.t_s[0])))
+    first = int(np.argmin(np.abs(states.t_s - 8.6)))
+    followed = [first + k * step for k in range(17)]                      # 8.6 ... 11.8 s
+    again = int(np.argmin(np.abs(states.t_s - 17.0)))
+    lost = list(range(followed[-1] + step, again, step))
+    k_then = states.p_runway_m[followed[-1], 1] / -states.p_runway_m[followed[-1], 2]
+    k_now = states.p_runway_m[again, 1] / -states.p_runway_m[again, 2]
+    assert abs(k_now - k_then) > 0.45                 # the fixed limit: 0.1 + 0.05 * 5 s + 0.1 |k_then| = 0.44
+    for window, kept in ((3.0, beside_m == 0.0), (0.0, False)):
+        script = ([_runway_result(states, i, scenario.runway, camera) for i in followed]
+                  + [not_found("lost")] * len(lost) + [_runway_result(states, again, scenario.runway, camera, beside_m)])
+        # a refused re-acquisition is tried once more from the last good detection: nothing there
+        monkeypatch.setattr(seq_module, "detect_runway",
+                            lambda *args, **kwargs: script.pop(0) if script else not_found("nothing"))
+        sequence = seq_module.DetectionSequence(camera, replace(DetectorParams(), identity_rate_window_s=window))
+        image = np.zeros((1024, 1024), np.uint8)
+        results = [sequence(image, float(states.roll_rad[i]), float(states.pitch_rad[i]), float(states.t_s[i]))
+                   for i in followed + lost + [again]]
+        assert all(r.found for r in results[:len(followed)])
+        assert results[-1].found == kept, results[-1].reason
+        if not kept:
+            assert "lateral offset / height" in results[-1].reason
