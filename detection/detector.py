@@ -474,6 +474,9 @@ def _predict(previous: DetectionResult, ctx: _Context, ground):
 
 
 _WEAK = "runway candidate too weak"
+#: Pixels added to a strip's width at its near end before its lateral offset is counted in
+#: widths (:func:`_pair_edges`, ``max_lateral_widths``): the width's own uncertainty there.
+LATERAL_WIDTH_SLACK_PX = 2.0
 
 
 def _hypothesis_of(prediction: Prediction) -> RunwayHypothesis:
@@ -868,6 +871,15 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
                       f"span {span_left_px:.0f} and {span_right_px:.0f} px): not the two sides of one runway")
     if not (s0_left + k_left * d_near < s0_right + k_right * d_near):
         return None, "the edges cross below the horizon"
+    # k = Y / h for a ground line Y beside the camera: the strip's centre line lies
+    # k_C / (k_R - k_L) = Y / W of its own widths to the side of the aircraft; counted at the
+    # near end with the width 2 px wider than measured (edges a pixel or two apart far out
+    # measure the width no better: thesis-8's runway at 4.7 km, 512 px, read 0.1-1.1 px wide)
+    lateral_widths = (abs(k_left + k_right) / 2.0 * d_near) / max((k_right - k_left) * d_near + LATERAL_WIDTH_SLACK_PX,
+                                                                  1e-12)
+    if lateral_widths > params.max_lateral_widths:
+        return None, (f"the strip lies {lateral_widths:.0f} of its own widths to the side of the aircraft (more than "
+                      f"{params.max_lateral_widths:g}): not a runway being approached (a road or taxiway beside it)")
     if prediction is not None:
         # the runway's width over the camera height (k_R - k_L = W / h) changes by a few per
         # cent a second; a parallel taxiway or road is half as wide or less

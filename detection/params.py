@@ -460,6 +460,16 @@ class DetectorParams(ParamsFile):
     horizon_sigma_px : float
         One-sigma uncertainty of the horizon from the inertial attitude, pixels: weighs the
         horizon against the three lines when the vanishing point is fused.
+    max_lateral_widths : float
+        The two edges are not the runway being approached when their centre line lies farther to
+        the side of the aircraft than this many of their own widths: in the horizon frame the
+        pencil slopes give ``k_C / (k_R - k_L) = Y / W`` exactly, whatever the height, attitude
+        and heading (a ground line at lateral distance ``Y`` from the camera has ``k = Y / h``).
+        An approach keeps the aircraft within about two localizer dots (5 deg) of the centre line:
+        from 7 km a 23 m runway (the narrowest the robustness study draws) is then 27 of its widths
+        to the side. A road 7 m wide parallel to the runway 340 m beside it is 49 widths out (the
+        ray-cast airport through a 62 deg barrel lens: taken for the runway from 4.4 to 1.3 km,
+        edges 55-70 px off, confidence 0.7).
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
@@ -639,7 +649,9 @@ class DetectorParams(ParamsFile):
         Over a sequence: how long the runway's place on the ground relative to the camera (its
         centre line's lateral offset over height, its width over height: the pencil slopes
         ``k_C`` and ``k_R - k_L`` in the horizon frame, independent of attitude) is remembered
-        to check a re-acquisition after a loss longer than ``hold_s``.
+        to check a re-acquisition after a loss longer than ``hold_s``. Only frames that follow a
+        good one within ``hold_s`` are remembered: a single acquisition can be a road or a
+        taxiway, and would refuse the runway for this long.
     identity_k_tolerance, identity_k_rate : float
         A re-acquired runway whose centre line's ``k_C`` (lateral offset / height) differs from
         the remembered one by more than ``identity_k_tolerance + identity_k_rate * dt`` plus 10 %
@@ -870,6 +882,7 @@ class DetectorParams(ParamsFile):
     threshold_search_fraction: float = 0.35
     horizon_sigma_px: float = 4.0
     tracking_sigma_px: float = 12.0
+    max_lateral_widths: float = 30.0
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     horizon_margin_px: float = 0.0
@@ -1045,7 +1058,7 @@ class DetectorParams(ParamsFile):
         "block_grid_min_ratio": (1.0, 100.0), "deblock_min_grid_step": (0.0, 255.0), "deblock_sigma_px": (0.0, 10.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
-        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "min_confidence": (0.0, 1.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "min_confidence": (0.0, 1.0),
         "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
         "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
         "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),

@@ -151,7 +151,7 @@ class DetectionSequence:
         if result.found and prior is None and self.identity is not None:
             result = self._check_identity(result, image, roll_rad, pitch_rad, float(t_s))
         if result.found and prior is not None and inertial:
-            result = self._check_same_object(result, dt)
+            result = self._check_same_object(result, prior, dt)
         if result.found:
             result = self._check_pavement_start(result, float(t_s))
         if result.found and prior is not None:
@@ -161,7 +161,11 @@ class DetectionSequence:
         if result.found:
             self.last_good = result
             self.t_good_s = float(t_s)
-            geometry = _ground_geometry(result, self.camera)
+            # only a runway followed from one frame to the next is remembered: a single
+            # acquisition can be a road or a taxiway, and remembered it would refuse the runway
+            # for identity_memory_s (the 62 deg barrel-lens ray-cast approach: a road 340 m beside
+            # the runway acquired once at 3.6 km, the runway refused for the next 8 s)
+            geometry = _ground_geometry(result, self.camera) if prior is not None else None
             if geometry is not None:
                 self.identity = (float(t_s),) + geometry
                 window = self.params.identity_rate_window_s
@@ -218,7 +222,7 @@ class DetectionSequence:
                 return again
         return _refused(result, f"{why} ({result.mode} picked another object parallel to the runway)")
 
-    def _check_same_object(self, result: DetectionResult, dt: float) -> DetectionResult:
+    def _check_same_object(self, result: DetectionResult, prior: DetectionResult, dt: float) -> DetectionResult:
         """Refuse a detection, tracked or not, whose centre line's lateral offset over height
         (``k_C``, :func:`_ground_geometry`) jumped since the last good one ``dt`` seconds earlier
         (within ``hold_s``) by more than the ``identity_k_*`` limits: another object parallel to the
@@ -229,10 +233,10 @@ class DetectionSequence:
         pixels), and every later frame would be refused against it. Only with the inertial
         attitude: a horizon read off each frame moves ``k_C`` with it (the cockpit footage without
         telemetry lost the runway to this check at close range, then acquired the glareshield)."""
-        if self.identity is None:
+        geometry = _ground_geometry(prior, self.camera)
+        if geometry is None:
             return result
-        _, k_then, _ = self.identity
-        k_then += self._k_rate() * dt
+        k_then = geometry[0] + self._k_rate() * dt
         why = _identity_mismatch(result, self.camera, k_then, math.nan, dt, self.params)
         if not why:
             return result

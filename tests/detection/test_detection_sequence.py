@@ -278,3 +278,47 @@ def test_a_reacquisition_is_checked_where_the_runway_has_moved_since(monkeypatch
         assert results[-1].found == kept, results[-1].reason
         if not kept:
             assert "lateral offset / height" in results[-1].reason
+
+
+def test_a_road_beside_the_runway_is_not_tracked_as_the_runway():
+    """The ray-cast airport's road, 7 m wide and 340 m beside the runway, parallel to it: it
+    meets the horizon at the runway's vanishing point and passes every single-frame test. Seen
+    from thesis-1 at 3.3 km it lies 40-odd of its own widths to the side of the aircraft
+    (``k_C / (k_R - k_L) = Y / W`` in the horizon frame): tracking started on it refuses it and the
+    search goes on to the runway; with the check off it follows the road (the 62 deg, 1280x720 barrel-lens approach
+    did, from 3.6 to 1.3 km, edges 55-70 px off the runway's, confidence 0.7)."""
+    from dataclasses import replace as _replace
+
+    from tests.helpers.detection_frames import airport_frame
+    from tests.helpers.raycast_airport import PaintedAirport
+    from visland.detection import detect_runway
+    from visland.features import batch_R_camera_from_runway
+    from visland.runway import Runway
+    from visland.scenarios import get_scenario
+    camera = CameraModel.from_fov(640, 360, 62.0, (0.0, -3.0, 0.0))
+    scenario = get_scenario("thesis-1")
+    runway = Runway(length_m=2600.0, width_m=40.0, aim_distance_m=scenario.runway.aim_distance_m,
+                    heading_deg=scenario.runway.heading_deg)
+    scene = PaintedAirport(seed=3, haze_range_m=6000.0)
+    image, state, labels = airport_frame("thesis-1", 3300.0, camera, scene, runway=runway)
+    R = batch_R_camera_from_runway(state.roll_rad, state.pitch_rad, state.dpsi_rad, camera.mount_rpy_rad)[0]
+    road_y = scene.parallel_road_offset_m
+    segments = {}
+    for name, y in (("left", road_y - 3.5), ("right", road_y + 3.5), ("center", road_y)):
+        ends = np.array([[-1200.0, y, 0.0], [-2600.0, y, 0.0]])         # from 700 to 2100 m ahead
+        uv, _ = camera.project((R @ (ends - state.p_runway_m[0]).T).T)
+        segments[name] = uv
+    lateral = (road_y - state.p_runway_m[0, 1]) / 7.0
+    assert lateral > 35.0, lateral
+    on_road = DetectionResult(found=True, reason="", confidence=0.7, segments_uv=segments,
+                              roll_rad=float(state.roll_rad[0]), pitch_rad=float(state.pitch_rad[0]),
+                              dpsi_rad=float(state.dpsi_rad[0]), mode="tracking")
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    checked = detect_runway(image, camera, roll, pitch, previous=on_road)
+    assert checked.found, checked.reason                                 # the search went on to the runway
+    runway_left = np.array([labels.corners_uv[0, 0], labels.corners_uv[0, 2]])
+    assert camera.line_distance_px(*checked.lines["left"], runway_left).max() < 2.0, checked.lines
+    unchecked = detect_runway(image, camera, roll, pitch, params=_replace(DetectorParams(), max_lateral_widths=1e6),
+                              previous=on_road)
+    assert unchecked.found, unchecked.reason
+    assert camera.line_distance_px(*unchecked.lines["left"], segments["left"]).max() < 3.0
