@@ -97,6 +97,7 @@ class DetectionSequence:
         self.params = params.scaled_to(camera)
         self.last_good: DetectionResult | None = None
         self.t_good_s: float | None = None
+        self.good_geometry: tuple | None = None                   # _ground_geometry(last_good)
         self.threshold_track: list[tuple[float, float]] = []      # (t_s, width_px) accepted
         self.threshold_rejected: list[tuple[float, float]] = []   # rejected in a row
         self.last_threshold: tuple[float, float] | None = None     # (t_s, width_px) last accepted
@@ -110,6 +111,7 @@ class DetectionSequence:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
         self.last_good = None
         self.t_good_s = None
+        self.good_geometry = None
         self.threshold_track = []
         self.threshold_rejected = []
         self.last_threshold = None
@@ -151,7 +153,7 @@ class DetectionSequence:
         if result.found and prior is None and self.identity is not None:
             result = self._check_identity(result, image, roll_rad, pitch_rad, float(t_s))
         if result.found and prior is not None and inertial:
-            result = self._check_same_object(result, prior, dt)
+            result = self._check_same_object(result, dt)
         if result.found:
             result = self._check_pavement_start(result, float(t_s))
         if result.found and prior is not None:
@@ -161,12 +163,12 @@ class DetectionSequence:
         if result.found:
             self.last_good = result
             self.t_good_s = float(t_s)
+            self.good_geometry = geometry = _ground_geometry(result, self.camera)
             # only a runway followed from one frame to the next is remembered: a single
             # acquisition can be a road or a taxiway, and remembered it would refuse the runway
             # for identity_memory_s (the 62 deg barrel-lens ray-cast approach: a road 340 m beside
             # the runway acquired once at 3.6 km, the runway refused for the next 8 s)
-            geometry = _ground_geometry(result, self.camera) if prior is not None else None
-            if geometry is not None:
+            if geometry is not None and prior is not None:
                 self.identity = (float(t_s),) + geometry
                 window = self.params.identity_rate_window_s
                 self.identity_history = [(t, k) for t, k in self.identity_history if float(t_s) - t <= window]
@@ -222,7 +224,7 @@ class DetectionSequence:
                 return again
         return _refused(result, f"{why} ({result.mode} picked another object parallel to the runway)")
 
-    def _check_same_object(self, result: DetectionResult, prior: DetectionResult, dt: float) -> DetectionResult:
+    def _check_same_object(self, result: DetectionResult, dt: float) -> DetectionResult:
         """Refuse a detection, tracked or not, whose centre line's lateral offset over height
         (``k_C``, :func:`_ground_geometry`) jumped since the last good one ``dt`` seconds earlier
         (within ``hold_s``) by more than the ``identity_k_*`` limits: another object parallel to the
@@ -233,10 +235,9 @@ class DetectionSequence:
         pixels), and every later frame would be refused against it. Only with the inertial
         attitude: a horizon read off each frame moves ``k_C`` with it (the cockpit footage without
         telemetry lost the runway to this check at close range, then acquired the glareshield)."""
-        geometry = _ground_geometry(prior, self.camera)
-        if geometry is None:
+        if self.good_geometry is None:
             return result
-        k_then = geometry[0] + self._k_rate() * dt
+        k_then = self.good_geometry[0] + self._k_rate() * dt
         why = _identity_mismatch(result, self.camera, k_then, math.nan, dt, self.params)
         if not why:
             return result
@@ -252,9 +253,9 @@ class DetectionSequence:
             return 0.0
         times = np.array([t for t, _ in self.identity_history])
         slopes = np.array([k for _, k in self.identity_history])
-        spread = float(np.sum((times - times.mean()) ** 2))
-        if times[-1] - times[0] < 1.0 or spread <= 0.0:
+        if times[-1] - times[0] < 1.0:
             return 0.0
+        spread = float(np.sum((times - times.mean()) ** 2))
         rate, offset = np.polyfit(times - times[-1], slopes, 1)
         residual = slopes - (rate * (times - times[-1]) + offset)
         standard_error_sq = float(np.sum(residual ** 2)) / (len(times) - 2) / spread
