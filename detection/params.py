@@ -92,6 +92,8 @@ NOT_SCALED_PX = (
     "centre_band_min_px", "centre_min_width_px", "confidence_residual_px",
     # a compressed frame's block grid and its smoothing: pixels of the codec, whatever the frame
     "block_grid_px", "deblock_sigma_px",
+    # pixel noise and its smoothing: pixels of the sensor
+    "denoise_sigma_px",
     # depth margins of the measurement (detector) kept at their 2048 px values at every size:
     # scaled with the frame they did worse at 1024 px (benchmarks/detection_robustness.py --size
     # 1024: 69.3 % found, 7 gross against 70.0 %, 6 gross; raycast_approach.py --size 1024 --fps 1
@@ -450,6 +452,14 @@ class DetectorParams(ParamsFile):
         their 104 frames were found: tests/datasets/test_process.py's video), clean JPEGs of
         quality 75-40 0.8-1.5. The limit lies between the two groups, with little room on
         either side (0.1-0.15 levels).
+    denoise_min_noise, denoise_sigma_px : float
+        A frame in which the runway was not found, that was not deblocked and whose pixel noise
+        (:func:`visland.detection.detector.pixel_noise`) is at least ``denoise_min_noise`` grey
+        levels is searched again smoothed by a Gaussian of ``denoise_sigma_px`` (pixels; 0:
+        never). The detector's contrast and support thresholds hold for a noise of 1-2 grey levels
+        (visland's clean frames 0.7-1.2, the ray-cast airport 2.0); white noise of deviation
+        ``s`` comes out of a Gaussian of sigma 1 px at about ``s / 3.5``. Only a second look:
+        smoothed, a side stripe blurs into the edge beside it (edges 0.2-0.5 px off).
     roi_margin_px : float
         Margin added around the predicted runway in tracking mode.
     roi_margin_fraction : float
@@ -876,6 +886,8 @@ class DetectorParams(ParamsFile):
     block_grid_min_ratio: float = 2.0
     deblock_sigma_px: float = 1.5
     deblock_min_grid_step: float = 2.15
+    denoise_min_noise: float = 2.5
+    denoise_sigma_px: float = 1.0
     # --- tracking, the measurement and its confidence (detector)
     roi_margin_px: float = 40.0
     roi_margin_fraction: float = 0.15
@@ -1056,6 +1068,7 @@ class DetectorParams(ParamsFile):
         "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
         "block_sample_rows": (1, 4096, "int"), "block_grid_px": (2, 64, "int"),
         "block_grid_min_ratio": (1.0, 100.0), "deblock_min_grid_step": (0.0, 255.0), "deblock_sigma_px": (0.0, 10.0),
+        "denoise_min_noise": (0.0, 255.0), "denoise_sigma_px": (0.0, 10.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
         "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "min_confidence": (0.0, 1.0),
