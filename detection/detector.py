@@ -925,6 +925,15 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
     if lateral_widths > params.max_lateral_widths:
         return None, (f"the strip lies {lateral_widths:.0f} of its own widths to the side of the aircraft (more than "
                       f"{params.max_lateral_widths:g}): not a runway being approached (a road or taxiway beside it)")
+    # k_C = Y / h itself: an approach descends along about 3 deg and keeps the aircraft within a
+    # few degrees of the centre line, so the strip lies a few heights to the side at most;
+    # unless the aircraft is over it or nearly (a lateral offset over a small height near the
+    # ground), a strip farther out is not the runway being approached
+    lateral_heights = abs(k_left + k_right) / 2.0
+    if lateral_heights > params.max_lateral_heights and lateral_widths > params.max_lateral_heights_widths:
+        return None, (f"the strip lies {lateral_heights:.1f} camera heights to the side of the aircraft (more than "
+                      f"{params.max_lateral_heights:g}) and {lateral_widths:.0f} of its own widths: not a runway being "
+                      "approached (a taxiway, road or runway beside it)")
     if prediction is not None:
         # the runway's width over the camera height (k_R - k_L = W / h) changes by a few per
         # cent a second; a parallel taxiway or road is half as wide or less

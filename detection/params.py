@@ -480,6 +480,17 @@ class DetectorParams(ParamsFile):
         to the side. A road 7 m wide parallel to the runway 340 m beside it is 49 widths out (the
         ray-cast airport through a 62 deg barrel lens: taken for the runway from 4.4 to 1.3 km,
         edges 55-70 px off, confidence 0.7).
+    max_lateral_heights, max_lateral_heights_widths : float
+        The two edges are not the runway being approached when their centre line lies farther to
+        the side of the aircraft than ``max_lateral_heights`` camera heights (``|k_C| = |Y| / h``,
+        exact in the horizon frame, no runway size assumed) while the aircraft is not over the
+        strip or nearly (more than ``max_lateral_heights_widths`` of its widths to the side: near
+        the ground a lateral offset of a few metres is many heights). An approach descends along
+        about 3 deg (h / d = 0.052) within a few degrees of the centre line: 3 heights is 9 deg off
+        it seen from the threshold; the thesis's approaches start at most 1.69 heights out
+        (thesis-4: 400 m at 5 km, 237 m high). A parallel strip 700 m beside the runway on the
+        robustness study's overcast frames at 2048 px is 5.6-5.8 heights out (acquired at 2.4 km and
+        tracked to 320 m, edges 90-130 px off, before this check).
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
@@ -895,6 +906,8 @@ class DetectorParams(ParamsFile):
     horizon_sigma_px: float = 4.0
     tracking_sigma_px: float = 12.0
     max_lateral_widths: float = 30.0
+    max_lateral_heights: float = 3.0
+    max_lateral_heights_widths: float = 1.5
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     horizon_margin_px: float = 0.0
@@ -1071,7 +1084,7 @@ class DetectorParams(ParamsFile):
         "denoise_min_noise": (0.0, 255.0), "denoise_sigma_px": (0.0, 10.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
-        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "min_confidence": (0.0, 1.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "min_confidence": (0.0, 1.0),
         "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
         "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
         "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),

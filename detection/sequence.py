@@ -215,6 +215,8 @@ class DetectionSequence:
         if dt > p.identity_memory_s:
             return result
         k_then += self._k_rate() * dt
+        if _not_approached(k_then, width_then, p):
+            return result
         why = _identity_mismatch(result, self.camera, k_then, width_then, dt, p)
         if not why:
             return result
@@ -238,6 +240,8 @@ class DetectionSequence:
         if self.good_geometry is None:
             return result
         k_then = self.good_geometry[0] + self._k_rate() * dt
+        if _not_approached(k_then, self.good_geometry[1], self.params):
+            return result
         why = _identity_mismatch(result, self.camera, k_then, math.nan, dt, self.params)
         if not why:
             return result
@@ -440,6 +444,16 @@ def _ground_geometry(result: DetectionResult, camera: CameraModel):
             return None
         slopes.append(float(k))
     return 0.5 * (slopes[0] + slopes[1]), abs(slopes[1] - slopes[0])
+
+
+def _not_approached(k_centre: float, width_ratio: float, params: DetectorParams) -> bool:
+    """Whether a strip whose centre line lies ``k_centre = Y / h`` to the side, ``width_ratio =
+    W / h`` wide, is no runway being approached (``max_lateral_heights`` heights to the side and
+    ``max_lateral_heights_widths`` of its widths, as the detector refuses a pair of edges): the
+    object remembered was then not the runway (tracked until it lay that far out), and does not
+    refuse the one found now (``k_centre`` carried forward at its own rate to the frame)."""
+    return (abs(k_centre) > params.max_lateral_heights
+            and abs(k_centre) > params.max_lateral_heights_widths * abs(width_ratio))
 
 
 def _identity_mismatch(result: DetectionResult, camera: CameraModel, k_then: float, width_then: float, dt: float,

@@ -292,6 +292,7 @@ def test_a_road_beside_the_runway_is_not_tracked_as_the_runway():
     from tests.helpers.detection_frames import airport_frame
     from tests.helpers.raycast_airport import PaintedAirport
     from visland.detection import detect_runway
+    from tests.helpers.raycast_airport import PaintedAirport, draw_frame
     from visland.features import batch_R_camera_from_runway
     from visland.runway import Runway
     from visland.scenarios import get_scenario
@@ -322,3 +323,36 @@ def test_a_road_beside_the_runway_is_not_tracked_as_the_runway():
                               previous=on_road)
     assert unchecked.found, unchecked.reason
     assert camera.line_distance_px(*unchecked.lines["left"], segments["left"]).max() < 3.0
+
+
+def _beside(lateral_heights: float, size: int = 640):
+    """A ray-cast frame 1.8 km before the threshold at 110 m, ``lateral_heights`` camera heights to
+    the side of the centre line, heading along the runway (no taxiway, road or fields: the runway
+    is the only strip); the camera, the attitude and the labelled corners."""
+    from tests.helpers.raycast_airport import PaintedAirport, draw_frame
+    from visland.features import batch_R_camera_from_runway
+    camera = CameraModel.default(size)
+    height = 110.0
+    p = np.array([-1800.0, lateral_heights * height, -height])
+    R = batch_R_camera_from_runway(np.array([0.0]), np.array([math.radians(-2.0)]), np.array([0.0]),
+                                   camera.mount_rpy_rad)[0]
+    scene = PaintedAirport(taxiway_offset_m=None, parallel_road_offset_m=None, crossing_road=False, fields=False)
+    image = draw_frame(scene, camera, p, R, supersample=2, blur_sigma_px=0.5, rng=np.random.default_rng(4))
+    return image, camera
+
+
+def test_a_strip_more_than_three_heights_to_the_side_is_not_the_runway_being_approached():
+    """k_C = Y / h in the horizon frame: a runway 3.5 camera heights to the side (385 m off its
+    centre line at 1.8 km, 12 deg seen from the threshold: no approach) is refused whatever it looks like,
+    the same runway 1.5 heights to the side (thesis-4 starts 1.69 out) is found; with the check
+    off (``max_lateral_heights`` 1e6) the far one is found too: the check, not the frame, refuses it."""
+    from visland.detection import detect_runway
+    image, camera = _beside(3.5)
+    refused = detect_runway(image, camera, 0.0, math.radians(-2.0))
+    assert not refused.found
+    assert "camera heights to the side of the aircraft" in refused.reason, refused.reason
+    unchecked = detect_runway(image, camera, 0.0, math.radians(-2.0),
+                              params=DetectorParams(max_lateral_heights=1e6))
+    assert unchecked.found, unchecked.reason
+    image, camera = _beside(1.5)
+    assert detect_runway(image, camera, 0.0, math.radians(-2.0)).found
