@@ -29,6 +29,10 @@ Usage::
         --work /work/data/NAME/approach --out /work/data/NAME/approach/frames.csv \\
         --figure docs/detection_robustness_approach.png
 
+Run it at ``--size 2048`` as well (the product's frame size, about 17 min here): the 1024 px run
+showed 1 gross frame where the 2048 px one showed 454 (2026-11-28, README) -- a parallel taxiway
+acquired where the runway is faint, thresholds on markings resolved only at that size.
+
 Writes the per-frame CSV (``--out``), the per-condition CSV (``--out`` with
 ``_conditions.csv``), prints a line per condition, the markdown table, and the figures as JSON
 (last line). ``--reuse`` scores run folders already in ``--work`` without rendering them again;
