@@ -488,9 +488,10 @@ class DetectorParams(ParamsFile):
         the ground a lateral offset of a few metres is many heights). An approach descends along
         about 3 deg (h / d = 0.052) within a few degrees of the centre line: 3 heights is 9 deg off
         it seen from the threshold; the thesis's approaches start at most 1.69 heights out
-        (thesis-4: 400 m at 5 km, 237 m high). A parallel strip 700 m beside the runway on the
-        robustness study's overcast frames at 2048 px is 5.6-5.8 heights out (acquired at 2.4 km and
-        tracked to 320 m, edges 90-130 px off, before this check).
+        (thesis-4: 400 m at 5 km, 237 m high). A parallel taxiway 185 m beside the runway on the
+        robustness study's overcast frames at 2048 px was acquired at 2.4 km, 1.33 heights out
+        (no geometry refuses it there), and tracked as its ``k_C`` grew with the descent (3 heights
+        at about 1 km, 5.8 at 250 m), edges 90-130 px off; with this check it is dropped at 3.
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
