@@ -179,7 +179,8 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     if spread < params.min_contrast:
         return fail(f"frame has no contrast below the horizon (grey levels within {spread:.0f})")
     across, elsewhere = block_grid_steps(image, ground, params.block_grid_px, params.block_sample_rows)
-    if elsewhere > 0 and across / elsewhere >= params.block_grid_min_ratio:
+    coarsely_compressed = elsewhere > 0 and across / elsewhere >= params.block_grid_min_ratio
+    if coarsely_compressed:
         # a coarsely compressed frame: its edges are staircases of blocks (edge points off by up
         # to half a block, a straight line's residuals a saw-tooth of 1-2 px RMS), not taken for a
         # bent line; where the grid steps strongly (a noisy sensor's coarse JPEG) it is also
@@ -187,27 +188,21 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
         # a small runway its contrast)
         params = params.for_block_grid()
         if params.deblock_sigma_px > 0 and across - elsewhere >= params.deblock_min_grid_step:
-            image = cv2.GaussianBlur(image, (0, 0), params.deblock_sigma_px)
-            if colour is not None:
-                colour = cv2.GaussianBlur(colour, (0, 0), params.deblock_sigma_px)
-        deblocked = True
-    else:
-        deblocked = False
+            image, colour = _blurred(image, colour, params.deblock_sigma_px)
 
     context = _Context(image, camera, horizon, params, roll, pitch, start, colour)
     try:
         result, why = _search_frame(context, previous, ground)
         noise = pixel_noise(image, ground, params.block_sample_rows) \
-            if result is None and not deblocked and params.denoise_sigma_px > 0 else math.nan
+            if result is None and not coarsely_compressed and params.denoise_sigma_px > 0 else math.nan
         if noise >= params.denoise_min_noise:
             # a noisy sensor's frame: the detector's contrast and support thresholds hold for a
             # pixel noise of 1-2 grey levels; smoothed, a noise of 3.5 falls to about that. Only
             # a second look: the smoothing blurs a side stripe into the edge beside it (edges
             # 0.2-0.5 px off where the frame as it came gives 0.05), so what is found without it
             # is measured without it
-            smooth = _Context(cv2.GaussianBlur(image, (0, 0), params.denoise_sigma_px), camera, horizon, params,
-                              roll, pitch, start,
-                              None if colour is None else cv2.GaussianBlur(colour, (0, 0), params.denoise_sigma_px))
+            smooth_image, smooth_colour = _blurred(image, colour, params.denoise_sigma_px)
+            smooth = _Context(smooth_image, camera, horizon, params, roll, pitch, start, smooth_colour)
             result, why_smoothed = _search_frame(smooth, previous, ground)
             if result is None:
                 why = f"{why} (smoothed against its pixel noise of {noise:.1f} grey levels: {why_smoothed})"
@@ -252,6 +247,12 @@ def _sample_rows(ground, rows: int) -> np.ndarray:
     return np.unique(np.linspace(v0 + 1, v1 - 2, max(1, int(rows))).round().astype(int))
 
 
+def _blurred(image: np.ndarray, colour: np.ndarray | None, sigma_px: float):
+    """``(image, colour)`` each smoothed by a Gaussian of ``sigma_px`` (a missing colour frame stays None)."""
+    return (cv2.GaussianBlur(image, (0, 0), sigma_px),
+            None if colour is None else cv2.GaussianBlur(colour, (0, 0), sigma_px))
+
+
 def pixel_noise(image: np.ndarray, ground, rows: int = 32) -> float:
     """The frame's pixel noise (standard deviation, grey levels) on ``rows`` rows of the ground box.
 
@@ -262,8 +263,8 @@ def pixel_noise(image: np.ndarray, ground, rows: int = 32) -> float:
     response over the ground is ``0.6745 * 6 * sigma`` and hardly sees the texture and edges
     the ground holds. Measured: visland's clean frames and H.264 recordings 0.7-1.2, the ray-cast
     airport of the tests (grey noise 2, blur 0.5 px) 2.0, the robustness study's 'variety 1'
-    (colour noise 5.2 per channel) 3.5-3.7 grey levels. NaN when the box is under 3 px tall or
-    wide.
+    (colour noise 5.2 per channel) 3.5-3.7 grey levels. NaN when the box is under 3 px wide or
+    5 px tall.
     """
     u0, v0, u1, v1 = (int(a) for a in ground)
     if u1 - u0 < 3 or v1 - v0 < 5:
@@ -930,7 +931,7 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
     # unless the aircraft is over it or nearly (a lateral offset over a small height near the
     # ground), a strip farther out is not the runway being approached
     lateral_heights = abs(k_left + k_right) / 2.0
-    if lateral_heights > params.max_lateral_heights and lateral_widths > params.max_lateral_heights_widths:
+    if beside_the_approach(lateral_heights, lateral_widths, params):
         return None, (f"the strip lies {lateral_heights:.1f} camera heights to the side of the aircraft (more than "
                       f"{params.max_lateral_heights:g}) and {lateral_widths:.0f} of its own widths: not a runway being "
                       "approached (a taxiway, road or runway beside it)")
@@ -947,6 +948,14 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
                      s0_right=s0_right, k_right=k_right, sigma_s0_right_px=sigma_s0_right_px, tolerance_px=tolerance,
                      segment_left_uv=segment_left_uv, segment_right_uv=segment_right_uv, d_far=d_far,
                      d_near=d_near), None
+
+
+def beside_the_approach(lateral_heights: float, lateral_widths: float, params: DetectorParams) -> bool:
+    """Whether a strip whose centre line lies ``lateral_heights`` camera heights (``|k_C| = |Y| / h``)
+    and ``lateral_widths`` of its own widths (``|Y| / W``) to the side of the aircraft is no runway
+    being approached: more than ``params.max_lateral_heights`` heights out while the aircraft is
+    not over it or nearly (more than ``params.max_lateral_heights_widths`` widths)."""
+    return lateral_heights > params.max_lateral_heights and lateral_widths > params.max_lateral_heights_widths
 
 
 #: Profiles sampled across each edge by :func:`_unbalanced_edges`, and the stretch of the edge

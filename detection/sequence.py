@@ -58,7 +58,7 @@ import numpy as np
 
 from visland.camera import CameraModel
 from visland.detection.attitude import ImageAttitude, attitude_from_image
-from visland.detection.detector import check_frame, detect_in_scene_frame, detect_runway
+from visland.detection.detector import beside_the_approach, check_frame, detect_in_scene_frame, detect_runway
 from visland.detection.horizon import horizon_frame
 from visland.detection.params import DetectorParams
 from visland.detection.result import DetectionResult, not_found
@@ -447,13 +447,13 @@ def _ground_geometry(result: DetectionResult, camera: CameraModel):
 
 
 def _not_approached(k_centre: float, width_ratio: float, params: DetectorParams) -> bool:
-    """Whether a strip whose centre line lies ``k_centre = Y / h`` to the side, ``width_ratio =
-    W / h`` wide, is no runway being approached (``max_lateral_heights`` heights to the side and
-    ``max_lateral_heights_widths`` of its widths, as the detector refuses a pair of edges): the
-    object remembered was then not the runway (tracked until it lay that far out), and does not
-    refuse the one found now (``k_centre`` carried forward at its own rate to the frame)."""
-    return (abs(k_centre) > params.max_lateral_heights
-            and abs(k_centre) > params.max_lateral_heights_widths * abs(width_ratio))
+    """Whether a remembered strip, its centre line ``k_centre = Y / h`` to the side and
+    ``width_ratio = W / h`` wide, is no runway being approached, as the detector refuses a pair of
+    edges (:func:`~visland.detection.detector.beside_the_approach`): the object remembered was
+    then not the runway (tracked until it lay that far out), and does not refuse the one found
+    now (``k_centre`` carried forward at its own rate to the frame)."""
+    heights = abs(k_centre)
+    return beside_the_approach(heights, heights / abs(width_ratio) if width_ratio else math.inf, params)
 
 
 def _identity_mismatch(result: DetectionResult, camera: CameraModel, k_then: float, width_then: float, dt: float,

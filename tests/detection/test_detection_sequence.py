@@ -292,7 +292,6 @@ def test_a_road_beside_the_runway_is_not_tracked_as_the_runway():
     from tests.helpers.detection_frames import airport_frame
     from tests.helpers.raycast_airport import PaintedAirport
     from visland.detection import detect_runway
-    from tests.helpers.raycast_airport import PaintedAirport, draw_frame
     from visland.features import batch_R_camera_from_runway
     from visland.runway import Runway
     from visland.scenarios import get_scenario
@@ -328,7 +327,7 @@ def test_a_road_beside_the_runway_is_not_tracked_as_the_runway():
 def _beside(lateral_heights: float, size: int = 640):
     """A ray-cast frame 1.8 km before the threshold at 110 m, ``lateral_heights`` camera heights to
     the side of the centre line, heading along the runway (no taxiway, road or fields: the runway
-    is the only strip); the camera, the attitude and the labelled corners."""
+    is the only strip); the frame and the camera (roll 0, pitch -2 deg)."""
     from tests.helpers.raycast_airport import PaintedAirport, draw_frame
     from visland.features import batch_R_camera_from_runway
     camera = CameraModel.default(size)
