@@ -350,7 +350,9 @@ class DetectorParams(ParamsFile):
         An end must lie this far from the horizon and the image bottom to count.
     parallel_score_ratio, parallel_min_width_ratio : float
         Of strips side by side, a wider one (by this ratio) scoring at least this fraction of the
-        other's score is put first (a runway is wider than its parallel taxiway).
+        other's score (per grey level of edge contrast when its contrast is the lower and it is
+        at least as long in the image) is put first (a runway is wider than its parallel
+        taxiway, and no shorter).
     parallel_min_gap : float
         ... and only if its edges step the same way and ground at least this fraction of the
         narrower strip's width lies between them (the ground between a runway and its taxiway,

@@ -9,47 +9,7 @@ frame seed); the errors are against the exact labels (:func:`visland.features.id
 import numpy as np
 import pytest
 
-STUDY_FPS = 5.0
-
-
-def _study_frames(scene_overrides: dict, runway_m: tuple, indices, size: int = 1024, variety: int | None = None):
-    """The study's frames ``indices`` (thesis-3 flown with the runway, 5 Hz, rendered by visland's
-    renderer with the frame's seed as the study draws it, :func:`visland.datasets.generate.frame_seed`):
-    ``[(rgb, state, labels, t_s)], camera``. With ``variety`` the runway and the scene are the
-    study's 'variety N' (:func:`visland.render.variety.draw_variety`) and the other two are ignored."""
-    import os
-    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from visland.camera import CameraModel
-    from visland.datasets.generate import frame_seed
-    from visland.features import batch_R_camera_from_runway, ideal_features
-    from visland.flight import simulate_flight
-    from visland.render import FrameRenderer, SceneParams
-    from visland.render.variety import draw_variety
-    from visland.runway import Runway
-    from visland.scenarios import resolve_scenario, with_runway
-    from visland.simulate import frame_times
-
-    if variety is not None:
-        drawn = draw_variety(variety)
-        runway, scene = Runway(length_m=drawn.runway_length_m, width_m=drawn.runway_width_m), drawn.scene
-    else:
-        runway, scene = Runway(length_m=runway_m[0], width_m=runway_m[1]), SceneParams(**scene_overrides)
-    trajectory = simulate_flight(with_runway(resolve_scenario("thesis-3"), runway))
-    times = frame_times(trajectory.duration_s, STUDY_FPS)
-    camera = CameraModel.default(size)
-    frames = []
-    with FrameRenderer(scene, camera, runway) as renderer:
-        for index in indices:
-            state = trajectory.at(times[index:index + 1])
-            R = batch_R_camera_from_runway(state.roll_rad, state.pitch_rad, state.dpsi_rad, camera.mount_rpy_rad)
-            rgb = renderer.render(state.p_runway_m[0], R[0], frame_seed=frame_seed(scene.seed, index))
-            frames.append((rgb, state, ideal_features(state, runway, camera), float(times[index])))
-    return frames, camera
-
-
-def _errors(result, camera, state, labels):
-    from visland.detection.accuracy import frame_errors
-    return frame_errors(result, camera, labels.corners_uv[0], labels.corners_visible[0], float(state.dpsi_rad[0]))
+from tests.helpers.study_frames import study_errors as _errors, study_frames as _study_frames
 
 
 @pytest.mark.slow
@@ -205,5 +165,50 @@ def test_a_wider_strip_beside_a_convincing_one_goes_first_without_an_end_in_view
     from visland.detection.trapezoid import _prefer_widest_parallel
     taxiway = _hypothesis(0.048, 0.176, 0.777, 2, -10.8)
     runway = _hypothesis(-1.202, -0.915, 0.352, 0, inside_minus_ground, spread)
+    ordered = _prefer_widest_parallel([taxiway, runway], DetectorParams())
+    assert (ordered[0] is runway) == runway_first
+
+
+@pytest.mark.slow
+def test_a_faint_concrete_runway_is_preferred_to_the_dark_taxiway_it_is_twice_as_wide_as():
+    """concrete, sand, mono at 2048 px (3000 x 45 m concrete runway, asphalt taxiways, sand,
+    monochrome), 3651 m before the threshold, the aircraft 200 m off the centre line, in line
+    with the parallel taxiway: in grey levels the concrete steps from the sand by 9 levels, the
+    asphalt taxiway by 53, and the runway (twice as wide, both ends in view) scored 0.22 of the
+    taxiway, which was acquired and tracked for 197 frames (edges about 100 px off). The runway
+    must be found: edges within 1 px, no corner 5 px off."""
+    from visland.detection import detect_runway
+    [(rgb, state, labels, _)], camera = _study_frames(
+        {"surface": "concrete", "surroundings": "sand", "monochrome": True}, (3000.0, 45.0), [2], size=2048)
+    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    errors = _errors(result, camera, state, labels)
+    assert result.found, result.reason
+    assert errors["edge_px"] < 1.0, errors
+    assert not errors["gross"], errors
+
+
+@pytest.mark.parametrize("runway_contrast, runway_score, runway_first, runway_length_px", [
+    (8.77, 1.29, True, 80.6),   # as measured: 0.22 of the taxiway's score, 0.15 of its contrast
+    (52.9, 1.29, False, 80.6),  # as contrasted as the taxiway: the raw scores compare, 0.22 < 0.3
+    (8.77, 0.25, False, 80.6),  # per grey level of contrast 0.26 of the taxiway: not convincing enough
+    (8.77, 1.29, False, 46.0),  # shorter in the image than the taxiway (55 px): raw scores
+])
+def test_a_wider_strip_beside_a_convincing_one_is_compared_per_grey_level_of_contrast(
+        runway_contrast, runway_score, runway_first, runway_length_px):
+    """The two strips of 'concrete, sand, mono' at 3651 m (2048 px): the asphalt taxiway (k -0.16
+    to -0.03, contrast 52.9, score 5.87) and the concrete runway beside it (k -1.21 to -0.96,
+    contrast 8.77, score 1.29). Divided by its contrast the runway's score is 1.3 times the
+    taxiway's and it goes first; a runway as contrasted as the taxiway is compared on raw
+    scores, and one that is weak per grey level too stays behind, as does one shorter in the
+    image than the taxiway (runway 80.6 px long, taxiway 54.9 px)."""
+    from dataclasses import replace
+    from visland.detection.params import DetectorParams
+    from visland.detection.trapezoid import _prefer_widest_parallel
+    taxiway = _hypothesis(-0.156, -0.033, 5.87, 2, -59.6)
+    taxiway = replace(taxiway, evidence={**taxiway.evidence, "contrast": 52.9, "interior": -60.3, "spread": 11.9,
+                                         "outside_gap": -0.47, "length_px": 54.9})
+    runway = _hypothesis(-1.206, -0.961, runway_score, 2, -16.9)
+    runway = replace(runway, evidence={**runway.evidence, "contrast": runway_contrast, "interior": -18.1,
+                                       "spread": 7.8, "outside_gap": 0.82, "length_px": runway_length_px})
     ordered = _prefer_widest_parallel([taxiway, runway], DetectorParams())
     assert (ordered[0] is runway) == runway_first
