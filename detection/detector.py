@@ -503,7 +503,8 @@ def _predict(previous: DetectionResult, ctx: _Context, ground):
     k_left = float(k_left_edge) + (float(s0_left_edge) - s0) / mid
     k_right = float(k_right_edge) + (float(s0_right_edge) - s0) / mid
     points = [ends["left"], ends["right"]]
-    corners = np.asarray(previous.corners_uv, float)[np.asarray(previous.corners_found, bool)]
+    corners = np.concatenate([np.asarray(previous.corners_uv, float)[np.asarray(previous.corners_found, bool)],
+                              np.asarray(previous.doubtful_corners_uv, float).reshape(-1, 2)])
     if len(corners):
         points.append(carry(corners))
     points = np.concatenate(points)
@@ -779,6 +780,25 @@ class _TransverseLines:
     pavement_marking_widths: float = math.nan
 
 
+def _corners_withheld(transverse: _TransverseLines, note: str) -> _TransverseLines:
+    """``transverse`` with every corner, the threshold and the runway end withheld, saying ``note``.
+
+    A corner is where an edge meets a transverse line: on edges of low confidence it is off
+    by as much as they are, and far more along the edge. In the robustness study at 2048 px
+    (monochrome, snow and sand) the white side stripes merge with the ground below 600 m; the
+    edges found are the stripes' inner sides, 2-5 px in, at confidence 0.25-0.37, and the near
+    corners 5-9 px off. The edges' own confidence decides (:func:`_edges_confidence`), not the
+    frame's: a centre line not found far out (not resolved) says nothing about the corners (of
+    the frames of the 1024 and 2048 px studies with a near corner and a confidence under 0.4,
+    the 47 over 5 px off all have edges under 0.4; of the 142 under 2 px, 49 have edges over
+    it, and so do 8 of the 13 of the ray-cast grey approach). The edges and the heading stay
+    reported.
+    """
+    return replace(transverse, corners_uv=np.full((4, 2), np.nan), corners_found=np.zeros(4, bool),
+                   threshold_line=(math.nan, math.nan), end_line=(math.nan, math.nan),
+                   notes=list(transverse.notes) + [note], threshold_method="")
+
+
 def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, prediction: Prediction | None = None):
     """Refine a hypothesis into a measurement, or say why it fails.
 
@@ -812,11 +832,18 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     if heading is None:
         return None, why
     vp_uv, dF_px, dpsi_rad = heading
-    transverse = _threshold_and_end(ctx, pair, vp_uv, bottom_depth, _extent_image(ctx, hypothesis))
-    notes.extend(transverse.notes)
     confidence, why = _confidence(ctx.params, pair, centre_fit)
     if confidence is None:
         return None, why
+    transverse = _threshold_and_end(ctx, pair, vp_uv, bottom_depth, _extent_image(ctx, hypothesis))
+    doubtful = np.zeros((0, 2))
+    edges_confidence = _edges_confidence(_edge_confidence_terms(ctx.params, pair))
+    if edges_confidence < ctx.params.corner_min_confidence and transverse.corners_found.any():
+        doubtful = transverse.corners_uv[transverse.corners_found]
+        note = (f"corners withheld: the edges they lie on have a confidence of {edges_confidence:.2f} "
+                f"(< {ctx.params.corner_min_confidence:g})")
+        transverse = _corners_withheld(transverse, note)
+    notes.extend(transverse.notes)
     lines = {name: _line_chart(camera, fits[name].line.homogeneous()) for name in ("left", "right")}
     lines["center"] = (_line_chart(camera, centre_fit.line.homogeneous()) if centre_fit is not None
                        else (math.nan, math.nan))
@@ -833,7 +860,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         vanishing_point_uv=vp_uv, horizon=ctx.horizon_line, dF_px=dF_px, dpsi_rad=dpsi_rad, roll_rad=ctx.roll,
         pitch_rad=ctx.pitch, mode=mode, roi=tuple(int(a) for a in roi), image_size=(camera.width, camera.height),
         elapsed_s=time.perf_counter() - ctx.start, notes=tuple(notes), threshold_method=transverse.threshold_method,
-        pavement_marking_widths=transverse.pavement_marking_widths), None
+        pavement_marking_widths=transverse.pavement_marking_widths, doubtful_corners_uv=doubtful), None
 
 
 def _extent_image(ctx: _Context, hypothesis: RunwayHypothesis):
@@ -1224,6 +1251,19 @@ def _confidence(params: DetectorParams, pair: _EdgePair, centre_fit: LineFit | N
     """A heuristic 0..1 confidence from the edges' support, straightness, agreement on the
     horizon and contrast, and whether the centre line was found: ``(confidence, None)``, or
     ``(None, reason)`` below ``params.min_confidence``."""
+    terms = _edge_confidence_terms(params, pair)
+    q_support, q_residual, q_vp, q_contrast = terms
+    confidence = _edges_confidence(terms) * (1.0 if centre_fit is not None else params.confidence_without_centre)
+    if confidence < params.min_confidence:
+        return None, (f"{_WEAK} (confidence {confidence:.2f} < {params.min_confidence:g}: "
+                      f"support {q_support:.2f}, residual {q_residual:.2f}, horizon agreement {q_vp:.2f}, "
+                      f"contrast {q_contrast:.2f})")
+    return confidence, None
+
+
+def _edge_confidence_terms(params: DetectorParams, pair: _EdgePair) -> tuple[float, float, float, float]:
+    """The edges' part of :func:`_confidence`, each 0..1: their support, straightness (the worse
+    residual), agreement on the horizon (the crossings' separation in sigmas) and contrast."""
     fits = pair.fits
     q_support = math.sqrt(fits["left"].support * fits["right"].support)
     q_residual = math.exp(-0.5 * (max(fits["left"].residual_px, fits["right"].residual_px)
@@ -1233,13 +1273,14 @@ def _confidence(params: DetectorParams, pair: _EdgePair, centre_fit: LineFit | N
     q_vp = math.exp(-0.5 * (chi / params.confidence_vp_sigmas) ** 2)
     q_contrast = min(1.0, min(fits["left"].contrast, fits["right"].contrast)
                      / (params.confidence_contrast_factor * params.min_contrast))
-    confidence = q_support * q_residual * q_vp * math.sqrt(q_contrast) * (
-        1.0 if centre_fit is not None else params.confidence_without_centre)
-    if confidence < params.min_confidence:
-        return None, (f"{_WEAK} (confidence {confidence:.2f} < {params.min_confidence:g}: "
-                      f"support {q_support:.2f}, residual {q_residual:.2f}, horizon agreement {q_vp:.2f}, "
-                      f"contrast {q_contrast:.2f})")
-    return confidence, None
+    return q_support, q_residual, q_vp, q_contrast
+
+
+def _edges_confidence(terms: tuple[float, float, float, float]) -> float:
+    """The confidence of the two edges alone (:func:`_edge_confidence_terms`), without the centre
+    line's part: what a corner on them is worth."""
+    q_support, q_residual, q_vp, q_contrast = terms
+    return q_support * q_residual * q_vp * math.sqrt(q_contrast)
 
 
 def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, polarity_hint: int) -> LineFit | NoFit:

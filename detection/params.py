@@ -502,6 +502,11 @@ class DetectorParams(ParamsFile):
         before a candidate loses the preference the prediction gives it.
     min_confidence : float
         Detections below this confidence are reported as not found.
+    corner_min_confidence : float
+        Where the two edges' own confidence (support, straightness, agreement on the horizon,
+        contrast: the confidence without the centre line's part) is below this, the corners, the
+        threshold and the runway end are withheld (the edges and the heading are reported):
+        corners lie on the edges and are as doubtful.
     horizon_margin_px : float
         The horizon from roll and pitch must cross the image enlarged by this margin.
     max_heading_deviation_deg : float
@@ -913,6 +918,7 @@ class DetectorParams(ParamsFile):
     max_lateral_heights_widths: float = 1.5
     max_width_change: float = 0.25
     min_confidence: float = 0.25
+    corner_min_confidence: float = 0.4
     horizon_margin_px: float = 0.0
     max_heading_deviation_deg: float = 40.0
     # --- the measurement of a hypothesis (detector._measure and its steps)
@@ -1087,7 +1093,7 @@ class DetectorParams(ParamsFile):
         "denoise_min_noise": (0.0, 255.0), "denoise_sigma_px": (0.0, 10.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
-        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "min_confidence": (0.0, 1.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
         "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
         "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
         "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),

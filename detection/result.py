@@ -82,6 +82,10 @@ class DetectionResult:
         Runway widths from the pavement's start to a threshold marking seen inside it (a
         displaced threshold's bar, stripes after a blast pad), placed or not; NaN when none was
         seen.
+    doubtful_corners_uv : ndarray, shape (k, 2)
+        Corners measured but withheld from ``corners_uv`` because the edges they lie on are of
+        low confidence (``DetectorParams.corner_min_confidence``): never a measurement, only what
+        the next frame's search window covers (tracking, :func:`visland.detection.detect_runway`).
     """
 
     found: bool
@@ -108,6 +112,7 @@ class DetectionResult:
     notes: tuple = ()
     threshold_method: str = ""
     pavement_marking_widths: float = math.nan
+    doubtful_corners_uv: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     @property
     def lines_found(self) -> dict:
