@@ -583,7 +583,8 @@ def _prefer_widest_parallel(hypotheses: list[RunwayHypothesis], params: Detector
 
 def _scores_as_parallel_strip(r: RunwayHypothesis, h: RunwayHypothesis, params: DetectorParams) -> bool:
     """Whether the strip ``r`` scores at least ``params.parallel_score_ratio`` of the strip ``h``
-    beside it, its score taken per grey level of edge contrast when its contrast is the lower.
+    beside it, the scores taken per grey level of edge contrast when ``r``'s contrast is the
+    lower and ``r`` is at least as long in the image.
 
     A hypothesis's score grows with its edges' contrast (the smaller step of the two), which says
     how far the two materials differ in grey, not which strip is the runway: in monochrome a
