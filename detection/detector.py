@@ -787,7 +787,7 @@ def _corners_withheld(transverse: _TransverseLines, note: str) -> _TransverseLin
     by as much as they are, and far more along the edge. In the robustness study at 2048 px
     (monochrome, snow and sand) the white side stripes merge with the ground below 600 m; the
     edges found are the stripes' inner sides, 2-5 px in, at confidence 0.25-0.37, and the near
-    corners 5-9 px off. The edges' own confidence decides (:func:`_edges_confidence`), not the
+    corners 5-9 px off. The edges' own confidence decides (:func:`_confidence`), not the
     frame's: a centre line not found far out (not resolved) says nothing about the corners (of
     the frames of the 1024 and 2048 px studies with a near corner and a confidence under 0.4,
     the 47 over 5 px off all have edges under 0.4; of the 142 under 2 px, 49 have edges over
@@ -832,12 +832,11 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     if heading is None:
         return None, why
     vp_uv, dF_px, dpsi_rad = heading
-    confidence, why = _confidence(ctx.params, pair, centre_fit)
+    confidence, edges_confidence, why = _confidence(ctx.params, pair, centre_fit)
     if confidence is None:
         return None, why
     transverse = _threshold_and_end(ctx, pair, vp_uv, bottom_depth, _extent_image(ctx, hypothesis))
     doubtful = np.zeros((0, 2))
-    edges_confidence = _edges_confidence(_edge_confidence_terms(ctx.params, pair))
     if edges_confidence < ctx.params.corner_min_confidence and transverse.corners_found.any():
         doubtful = transverse.corners_uv[transverse.corners_found]
         note = (f"corners withheld: the edges they lie on have a confidence of {edges_confidence:.2f} "
@@ -1247,23 +1246,13 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
                             near.method if near is not None else "", marking_widths)
 
 
-def _confidence(params: DetectorParams, pair: _EdgePair, centre_fit: LineFit | None) -> tuple[float | None, str | None]:
+def _confidence(params: DetectorParams, pair: _EdgePair,
+                centre_fit: LineFit | None) -> tuple[float | None, float | None, str | None]:
     """A heuristic 0..1 confidence from the edges' support, straightness, agreement on the
-    horizon and contrast, and whether the centre line was found: ``(confidence, None)``, or
-    ``(None, reason)`` below ``params.min_confidence``."""
-    terms = _edge_confidence_terms(params, pair)
-    q_support, q_residual, q_vp, q_contrast = terms
-    confidence = _edges_confidence(terms) * (1.0 if centre_fit is not None else params.confidence_without_centre)
-    if confidence < params.min_confidence:
-        return None, (f"{_WEAK} (confidence {confidence:.2f} < {params.min_confidence:g}: "
-                      f"support {q_support:.2f}, residual {q_residual:.2f}, horizon agreement {q_vp:.2f}, "
-                      f"contrast {q_contrast:.2f})")
-    return confidence, None
-
-
-def _edge_confidence_terms(params: DetectorParams, pair: _EdgePair) -> tuple[float, float, float, float]:
-    """The edges' part of :func:`_confidence`, each 0..1: their support, straightness (the worse
-    residual), agreement on the horizon (the crossings' separation in sigmas) and contrast."""
+    horizon and contrast, and whether the centre line was found: ``(confidence, edges, None)``
+    with ``edges`` the two edges' own part (without the centre line's factor: what a corner on
+    them is worth, :func:`_corners_withheld`), or ``(None, None, reason)`` below
+    ``params.min_confidence``."""
     fits = pair.fits
     q_support = math.sqrt(fits["left"].support * fits["right"].support)
     q_residual = math.exp(-0.5 * (max(fits["left"].residual_px, fits["right"].residual_px)
@@ -1273,14 +1262,13 @@ def _edge_confidence_terms(params: DetectorParams, pair: _EdgePair) -> tuple[flo
     q_vp = math.exp(-0.5 * (chi / params.confidence_vp_sigmas) ** 2)
     q_contrast = min(1.0, min(fits["left"].contrast, fits["right"].contrast)
                      / (params.confidence_contrast_factor * params.min_contrast))
-    return q_support, q_residual, q_vp, q_contrast
-
-
-def _edges_confidence(terms: tuple[float, float, float, float]) -> float:
-    """The confidence of the two edges alone (:func:`_edge_confidence_terms`), without the centre
-    line's part: what a corner on them is worth."""
-    q_support, q_residual, q_vp, q_contrast = terms
-    return q_support * q_residual * q_vp * math.sqrt(q_contrast)
+    edges = q_support * q_residual * q_vp * math.sqrt(q_contrast)
+    confidence = edges * (1.0 if centre_fit is not None else params.confidence_without_centre)
+    if confidence < params.min_confidence:
+        return None, None, (f"{_WEAK} (confidence {confidence:.2f} < {params.min_confidence:g}: "
+                            f"support {q_support:.2f}, residual {q_residual:.2f}, horizon agreement {q_vp:.2f}, "
+                            f"contrast {q_contrast:.2f})")
+    return confidence, edges, None
 
 
 def _refine_centre(ctx: _Context, s0, k_centre, k_left, k_right, d_far, d_near, polarity_hint: int) -> LineFit | NoFit:
