@@ -104,7 +104,7 @@ NOT_SCALED_PX = (
     # where the ground begins and the threshold marking: depth pixels of resolution and sampling
     # (threshold_marking), kept at their 2048 px values
     "ground_begin_min_px", "ground_begin_chroma_rows_px", "marking_min_resolved_px", "marking_unresolved_min_span_px",
-    "marking_unresolved_plain_px",
+    "marking_unresolved_plain_px", "marking_stripes_resolved_px",
 )
 
 
@@ -646,6 +646,13 @@ class DetectorParams(ParamsFile):
         A line is a band of markings when each quarter of the width has at least the first
         fraction marked, and then a bar when the second fraction of the width is marked, stripes
         when at least this many separate marked runs cross it.
+    marking_stripes_min_widths, marking_stripes_resolved_px : float
+        Stripes are the threshold's only when they run along the runway over this many runway widths at
+        least (ICAO Annex 14 5.2.4: 30 m at least, 0.5 of a 60 m width; FAA 150 ft), checked where
+        that length spans the given pixels of depth or more: a row of arrow heads before a
+        displaced threshold's bar (4.5 m long) crosses the width as stripes do (the robustness
+        study at 2048 px, 600 to 390 m before it: taken for the stripes, the threshold put 6-12 px
+        before the bar).
     confidence_residual_px : float
         The confidence's straightness term is ``exp(-(r / this)^2 / 2)``, r the larger edge RMS
         residual (pixels).
@@ -981,6 +988,8 @@ class DetectorParams(ParamsFile):
     marking_quarter_min_share: float = 0.15
     marking_bar_coverage: float = 0.8
     marking_min_stripes: int = 3
+    marking_stripes_min_widths: float = 0.3
+    marking_stripes_resolved_px: float = 3.0
     confidence_residual_px: float = 0.8
     confidence_vp_sigmas: float = 3.0
     confidence_contrast_factor: float = 4.0
@@ -1122,7 +1131,7 @@ class DetectorParams(ParamsFile):
         "marking_unresolved_min_span_px": (0.0, 10000.0), "marking_start_fraction": (0.0, 10.0),
         "marking_unresolved_coverage": (0.0, 1.0), "marking_unresolved_plain_px": (0.0, 1000.0),
         "marking_bright_percentile": (50.0, 100.0), "marking_quarter_min_share": (0.0, 1.0),
-        "marking_bar_coverage": (0.0, 1.0), "marking_min_stripes": (1, 1000, "int"), "confidence_residual_px": (0.01, 100.0),
+        "marking_bar_coverage": (0.0, 1.0), "marking_min_stripes": (1, 1000, "int"), "marking_stripes_min_widths": (0.0, 100.0), "marking_stripes_resolved_px": (0.0, 1000.0), "confidence_residual_px": (0.01, 100.0),
         "confidence_vp_sigmas": (0.1, 100.0), "confidence_contrast_factor": (0.1, 1000.0),
         "confidence_without_centre": (0.0, 1.0),
         "horizon_margin_px": (0.0, 100000.0), "hold_s": (0.0, 60.0), "max_heading_deviation_deg": (1.0, 90.0), "max_edge_turn_rad": (0.0, 3.2),

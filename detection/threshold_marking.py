@@ -15,6 +15,10 @@ width, either as one bar covering most of it or as several separate stripes. Oth
 do not: the centre line, arrows and the designation are central, touchdown-zone and aiming-point
 marks leave the middle free, and a chevron's two arms cross a line at two places only.
 
+Marks shorter along the runway than the threshold's stripes (30 m at least, ICAO Annex 14
+5.2.4; FAA 150 ft), a displaced threshold's row of arrow heads, are skipped where that length is
+resolved; a bar one line wide just before the stripes is the threshold's bar.
+
 Only when such a band starts clearly inside the pavement (``min_pavement_widths`` runway widths
 along it at least; ICAO stripes begin 6 m in, 0.1 to 0.26 widths; blast pads and displaced
 thresholds are 30 m to several hundred metres long) is the pavement before it
@@ -45,6 +49,10 @@ __all__ = ["ThresholdMarking", "threshold_marking", "ground_begins", "STRIPES_FR
 #: Threshold stripes begin 6 m past the threshold (ICAO Annex 14 5.2.4.5; FAA: 20 ft), in runway
 #: widths for a 45 m runway (the width is not known in metres: 0.1 to 0.26 of 23-60 m widths).
 STRIPES_FROM_THRESHOLD_WIDTHS = 6.0 / 45.0
+
+#: Depth pixels under which a marking's blur along the runway shows on a single line of the
+#: band test (its lines are half a pixel apart), and the blur allowed around a bar one line wide.
+ONE_LINE_PX = 1.0
 
 
 @dataclass(frozen=True)
@@ -246,29 +254,34 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     if unresolved:
         # stripes are not told from a bar: a band across the width is the marking
         band = spans_all & (coverage >= unresolved_coverage)
-    # the first band of at least two lines (1 px), nearest the pavement's start
-    hits = np.nonzero(band[:-1] & band[1:])[0]
-    if not len(hits):
+    # the first band nearest the pavement's start that is a bar or stripes long enough to be
+    # the threshold's (a bar seen on one line just before the stripes is taken for them)
+    # one line is a band only resolved and far enough in not to be the threshold's own stripes
+    # behind a band of ground taken for pavement (marking_memory_min_widths)
+    single_lines_from = -math.inf if unresolved else depth_at(params.marking_memory_min_widths)
+    found = _first_threshold_band(band, is_bar, depths, fx, width_k, params, single_lines_from)
+    if found is None:
         return doubtful
-    first = int(hits[0])
+    first, kind, marks_end = found
     d_band = float(depths[first])
     widths_in = (fx / d_band - fx / d_pavement) / width_k
     if not (min_pavement_widths <= widths_in <= max_pavement_widths):
         return doubtful
     # the band's near edge to a fraction of a pixel: the mean level across the width crossing
-    # midway between the plain pavement before it and the band
-    j_band = slice(first, min(len(depths), first + 3))
-    j_plain = slice(max(0, first - 6), max(0, first - 1))
+    # midway between the plain pavement before it and the band, both read on their own lines only
+    # (not on the short marks skipped before the band, a displaced threshold's arrow heads, nor on
+    # the gap after a bar one line wide)
+    j_plain = slice(max(0, first - 6, marks_end), max(0, first - 1))
+    j_band = [j for j in range(first, min(len(depths), first + 3)) if band[j]]
     band_level = float(np.nanmean(level[j_band]))
-    plain_level = float(np.nanmean(level[j_plain])) if first >= 2 else surface
+    plain_level = float(np.nanmean(level[j_plain])) if first - 1 > max(0, marks_end) else surface
     mid = 0.5 * (band_level + plain_level)
     edge = d_band
-    for j in range(max(0, first - 4), min(len(depths) - 1, first + 2)):
+    for j in range(max(0, first - 4, marks_end), min(len(depths) - 1, first + 2)):
         a, b = level[j] - mid, level[j + 1] - mid
         if math.isfinite(a) and math.isfinite(b) and (a * sign) < 0 <= (b * sign):
             edge = float(depths[j] + (depths[j + 1] - depths[j]) * a / (a - b))
             break
-    kind = "bar" if is_bar[first:first + 3].any() else "stripes"
     if kind == "stripes":
         # the threshold 6 m before the stripes
         edge = fx / (fx / edge - STRIPES_FROM_THRESHOLD_WIDTHS * width_k)
@@ -277,6 +290,49 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
                           corner_right_uv=meet_h(line_h, line_right), depth_px=edge,
                           step=(band_level - plain_level), significance=math.nan, method=f"marking-{kind}", spans=True)
     return ThresholdMarking(line=line, kind=kind, pavement_widths=float(widths_in))
+
+
+def _first_threshold_band(band: np.ndarray, is_bar: np.ndarray, depths: np.ndarray, fx: float, width_k: float,
+                          params: DetectorParams, single_lines_from: float = math.inf) -> tuple[int, str, int] | None:
+    """The first band of ``band`` that can be the threshold marking: ``(index of its first line,
+    "bar" or "stripes", index after the last short marks skipped before it (0: none))``, or None.
+
+    A band is two lines at least (1 px: one line alone can be noise): a bar, or stripes that run
+    along the runway over ``params.marking_stripes_min_widths`` runway widths at least wherever
+    that length spans ``params.marking_stripes_resolved_px`` of depth (shorter marks across the
+    width, a displaced threshold's arrow heads, are skipped). Where that length spans under a
+    pixel of depth, stripes on one line are a band at depths up to ``single_lines_from`` (pixels
+    below the horizon): the lines are half a pixel apart, and stripes blurred over them pass the
+    test on their brightest line only (the robustness study's blast pad at 2.8 km, 2048 px).
+    The caller gives ``-inf`` where the stripes are not resolved across the runway (one line
+    across the width can then be any marking: the touchdown zone's 400 m in at 3.45 km) and
+    otherwise the depth of ``marking_memory_min_widths`` runway widths in (nearer, one line was
+    the threshold's own stripes seen behind a band of ground taken for pavement: 'short narrow'
+    at 1024 px, 950 m, 2.8 px off). A bar on a single line within the 6 m before the stripes (plus a
+    pixel of blur) is the threshold's bar: the threshold is its near edge, not 6 m before the
+    stripes' blurred start. ``depths`` decrease from the pavement's start; a point ``n`` widths
+    farther along than depth ``d`` is at depth ``f / (f / d + n k)``."""
+    first, marks_end = 0, 0
+    while first < len(band):
+        if not band[first]:
+            first += 1
+            continue
+        stop = first + int(np.argmin(band[first:])) if not band[first:].all() else len(band)
+        d_long = fx / (fx / depths[first] + params.marking_stripes_min_widths * width_k)
+        if stop - first == 1 and (depths[first] > single_lines_from or is_bar[first]
+                                  or depths[first] - d_long >= ONE_LINE_PX):
+            first = stop                                            # one line: noise, or a bar too thin to tell
+            continue
+        if is_bar[first:min(stop, first + 3)].any():
+            return first, "bar", marks_end
+        resolved = depths[first] - d_long >= params.marking_stripes_resolved_px
+        if stop < len(band) and resolved and depths[stop - 1] > d_long:
+            first = marks_end = stop                                # short marks: not the threshold's stripes
+            continue
+        d_threshold = fx / (fx / depths[first] - STRIPES_FROM_THRESHOLD_WIDTHS * width_k) + ONE_LINE_PX
+        bars = [j for j in range(first) if is_bar[j] and depths[j] <= d_threshold]
+        return (bars[0], "bar", marks_end) if bars else (first, "stripes", marks_end)
+    return None
 
 
 def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine, d_from: float,

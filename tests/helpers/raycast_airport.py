@@ -74,6 +74,10 @@ class PaintedAirport:
     #: say, marked by the stripes 6 m past it and, with ``threshold_bar``, a 1.8 m white bar at it
     pre_threshold_m: float = 0.0
     threshold_bar: bool = False
+    #: with a paved length before the threshold, a row of white arrow heads across its width
+    #: just before the threshold (a displaced threshold's, ICAO Annex 14 figure 5-4): 4 m long,
+    #: 3 m wide, 9 m apart, short marks across the width that are no threshold stripes
+    threshold_heads: bool = False
     #: grey level of the distance haze (and of rays that reach no ground)
     haze_grey: float = 165.0
 
@@ -117,6 +121,9 @@ class PaintedAirport:
         rects.append((L / 2, 0.0, L / 2, half, 0.0, self.runway_grey))
         if self.pre_threshold_m > 0:
             rects.append((-self.pre_threshold_m / 2, 0.0, self.pre_threshold_m / 2, half, 0.0, self.runway_grey))
+            if self.threshold_heads:
+                for y_c in np.arange(-half + 6.0, half - 4.0, 9.0):
+                    rects.append((-9.0, float(y_c), 2.0, 1.5, 0.0, self.marking_grey))
         if self.threshold_bar:
             marks.append((0.9, 0.0, 0.9, half - 0.9, 0.0, self.marking_grey))
         if self.side_stripes:
