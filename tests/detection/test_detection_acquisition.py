@@ -337,7 +337,7 @@ def test_threshold_stripes_blurred_onto_one_line_mark_a_blast_pad_threshold(fram
     2048 px, 2877 and 2834 m out: the threshold's stripes (30 m long, 1.6 px of depth) pass the
     marking test on their brightest line only (the lines are 0.5 px apart), so no marking was
     found and the threshold was put where the pavement begins, 7.0-7.4 px before the true one
-    (found, no doubt: 5 gross frames once the sightings of 2.5 km earlier had left the
+    (found, no doubt: 5 gross frames once the sightings at 3.6 km, 10 s earlier, had left the
     sequence's memory). Both near corners must be within 1 px of the exact labels."""
     from tests.helpers.study_frames import study_errors, study_frames
     from visland.detection import detect_runway
