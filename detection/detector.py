@@ -30,7 +30,7 @@ import numpy as np
 
 from visland.camera import CameraModel
 from visland.detection.candidates import candidate_lines, check_lines, hough_segments
-from visland.detection.horizon import HorizonFrame, horizon_frame
+from visland.detection.horizon import HorizonFrame, horizon_frame, widths_along
 from visland.detection.params import DetectorParams
 from visland.detection.pencil import FloatFrame
 from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of,
@@ -1217,8 +1217,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         # a runway is a long strip (params.min_length_to_width widths at least): an "end" found
         # nearer than that past the threshold is a marking (the far side of the threshold stripes
         # when the surface seemed to end there), not the runway's end
-        # (n widths farther along than depth d lies at depth fx / (fx / d + n k), k = W / h)
-        length_widths = (camera.fx / far.depth_px - camera.fx / near.depth_px) / max(width_slope, 1e-9)
+        length_widths = widths_along(camera.fx, near.depth_px, far.depth_px, max(width_slope, 1e-9))
         if length_widths < params.min_length_to_width:
             notes.append(f"runway end withheld: {length_widths:.1f} runway widths past the threshold only "
                          f"(< {params.min_length_to_width:g})")

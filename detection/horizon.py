@@ -30,7 +30,7 @@ import numpy as np
 from visland.camera import CameraModel
 from visland.features import batch_R_camera_from_runway, horizon_line
 
-__all__ = ["HorizonFrame", "horizon_frame", "meet_h", "cross3"]
+__all__ = ["HorizonFrame", "horizon_frame", "meet_h", "cross3", "depth_along", "widths_along"]
 
 
 def cross3(a, b) -> np.ndarray:
@@ -59,6 +59,44 @@ def cross3(a, b) -> np.ndarray:
     out = np.empty(np.broadcast_shapes(np.shape(c0), np.shape(c1), np.shape(c2)) + (3,), np.result_type(c0, c1, c2))
     out[..., 0], out[..., 1], out[..., 2] = c0, c1, c2
     return out
+
+
+def depth_along(fx: float, depth, widths, width_k: float):
+    """Depth below the horizon of the ground point ``widths`` runway widths farther along the
+    runway (negative: nearer) than the one at ``depth``.
+
+    A ground point at distance ``x`` ahead lies at ``d = f h / x``, and ``n W`` farther at
+    ``f / (f / d + n k)`` with ``k = W / h``.
+
+    Parameters
+    ----------
+    fx : float
+        Focal length, pixels.
+    depth : float or ndarray
+        Depth below the horizon of the starting point, pixels.
+    widths : float or ndarray
+        Runway widths along the runway, away from the camera (negative: toward it).
+    width_k : float
+        The runway's width over the camera height, ``W / h`` (the edges' pencil slopes'
+        difference).
+    """
+    return fx / (fx / depth + widths * width_k)
+
+
+def widths_along(fx: float, depth_near, depth_far, width_k: float):
+    """Runway widths along the runway from the ground point at ``depth_near`` to the one at
+    ``depth_far``: the inverse of :func:`depth_along`.
+
+    Parameters
+    ----------
+    fx : float
+        Focal length, pixels.
+    depth_near, depth_far : float or ndarray
+        Depths below the horizon of the two points, pixels.
+    width_k : float
+        The runway's width over the camera height, ``W / h``.
+    """
+    return (fx / depth_far - fx / depth_near) / width_k
 
 
 def meet_h(line_a: np.ndarray, line_b: np.ndarray) -> np.ndarray:

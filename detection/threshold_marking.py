@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from visland.detection.horizon import HorizonFrame, meet_h
+from visland.detection.horizon import HorizonFrame, depth_along, meet_h, widths_along
 from visland.detection.params import DetectorParams
 from visland.detection.refine import PixelLine, chroma_of, percentile_of, remap_inside
 from visland.detection.transverse import TransverseLine, edge_crossings_s, transverse_grid, transverse_line_h
@@ -181,7 +181,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         return None
 
     def depth_at(widths):                      # depth of the point `widths` runway widths farther along
-        return fx / (fx / d_pavement + widths * width_k)
+        return depth_along(fx, d_pavement, widths, width_k)
 
     # too far to resolve the threshold's own stripes at the pavement's start: they are still seen
     # blended, a brighter first pixel of pavement (checked below, before a band further in counts)
@@ -239,7 +239,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
             if rise >= max(min_step, 0.5 * abs(pavement_step)):
                 j = int(np.nonzero(later)[0][np.nanargmax(level[later])])
                 doubtful = ThresholdMarking(line=None, kind="unresolved",
-                                            pavement_widths=float((fx / depths[j] - fx / d_pavement) / width_k))
+                                            pavement_widths=float(widths_along(fx, d_pavement, depths[j], width_k)))
     if not contrast >= max(2.0 * min_step, abs(pavement_step)):
         return doubtful
     marked = np.nan_to_num((values - surface) * sign, nan=-1.0) > 0.5 * contrast
@@ -264,7 +264,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         return doubtful
     first, kind, marks_end = found
     d_band = float(depths[first])
-    widths_in = (fx / d_band - fx / d_pavement) / width_k
+    widths_in = widths_along(fx, d_pavement, d_band, width_k)
     if not (min_pavement_widths <= widths_in <= max_pavement_widths):
         return doubtful
     # the band's near edge to a fraction of a pixel: the mean level across the width crossing
@@ -284,7 +284,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
             break
     if kind == "stripes":
         # the threshold 6 m before the stripes
-        edge = fx / (fx / edge - STRIPES_FROM_THRESHOLD_WIDTHS * width_k)
+        edge = depth_along(fx, edge, -STRIPES_FROM_THRESHOLD_WIDTHS, width_k)
     line_h = transverse_line_h(horizon, s0, k_centre, edge)
     line = TransverseLine(line_h=line_h, corner_left_uv=meet_h(line_h, line_left),
                           corner_right_uv=meet_h(line_h, line_right), depth_px=edge,
@@ -312,26 +312,22 @@ def _first_threshold_band(band: np.ndarray, is_bar: np.ndarray, depths: np.ndarr
     pixel of blur) is the threshold's bar: the threshold is its near edge, not 6 m before the
     stripes' blurred start. ``depths`` decrease from the pavement's start; a point ``n`` widths
     farther along than depth ``d`` is at depth ``f / (f / d + n k)``."""
-    first, marks_end = 0, 0
-    while first < len(band):
-        if not band[first]:
-            first += 1
-            continue
-        stop = first + int(np.argmin(band[first:])) if not band[first:].all() else len(band)
-        d_long = fx / (fx / depths[first] + params.marking_stripes_min_widths * width_k)
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], band.astype(np.int8), [0]))))
+    marks_end = 0
+    for first, stop in zip(edges[::2].tolist(), edges[1::2].tolist()):      # runs of band lines
+        d_long = depth_along(fx, depths[first], params.marking_stripes_min_widths, width_k)
         if stop - first == 1 and (depths[first] > single_lines_from or is_bar[first]
                                   or depths[first] - d_long >= ONE_LINE_PX):
-            first = stop                                            # one line: noise, or a bar too thin to tell
-            continue
+            continue                                                # one line: noise, or a bar too thin to tell
         if is_bar[first:min(stop, first + 3)].any():
             return first, "bar", marks_end
         resolved = depths[first] - d_long >= params.marking_stripes_resolved_px
         if stop < len(band) and resolved and depths[stop - 1] > d_long:
-            first = marks_end = stop                                # short marks: not the threshold's stripes
+            marks_end = stop                                        # short marks: not the threshold's stripes
             continue
-        d_threshold = fx / (fx / depths[first] - STRIPES_FROM_THRESHOLD_WIDTHS * width_k) + ONE_LINE_PX
-        bars = [j for j in range(first) if is_bar[j] and depths[j] <= d_threshold]
-        return (bars[0], "bar", marks_end) if bars else (first, "stripes", marks_end)
+        d_threshold = depth_along(fx, depths[first], -STRIPES_FROM_THRESHOLD_WIDTHS, width_k) + ONE_LINE_PX
+        bars = np.flatnonzero(is_bar[:first] & (depths[:first] <= d_threshold))
+        return (int(bars[0]), "bar", marks_end) if len(bars) else (first, "stripes", marks_end)
     return None
 
 

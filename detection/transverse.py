@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from visland.detection.horizon import HorizonFrame, cross3, meet_h
+from visland.detection.horizon import HorizonFrame, cross3, depth_along, meet_h
 from visland.detection.params import DetectorParams
 from visland.detection.pencil import as_slice, finite_median, rectify, row_mean, row_quantile, row_quantiles
 from visland.detection.refine import MAD_TO_SIGMA, PixelLine, chroma_of, median_of
@@ -614,9 +614,8 @@ def pavement_beyond_edges(image, horizon: HorizonFrame, s0: float, left: PixelLi
     if not (math.isfinite(s_left) and math.isfinite(s_right)):
         return ()
     k_centre = (0.5 * (s_left + s_right) - s0) / d_ref
-    # one runway width farther along than depth d lies at depth fx / (fx / d + k), k = W / h
-    fx = horizon.camera.fx
-    width_px = depth - fx / (fx / depth + abs(s_right - s_left) / d_ref)
+    # the depth one runway width spans there (k = W / h, the edges' slope difference)
+    width_px = depth - depth_along(horizon.camera.fx, depth, 1.0, abs(s_right - s_left) / d_ref)
     if not width_px >= params.crossing_pavement_min_width_px:
         return ()
     near_px, far_px = params.crossing_pavement_depth_px
