@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 
+from tests.helpers.study_frames import detected_with_errors, study_frame_at, study_frames
 from visland.detection import DetectorParams
 from visland.detection.trapezoid import RunwayHypothesis, _ground_between_strips_last, _prefer_widest_parallel
 
@@ -104,7 +105,7 @@ def test_a_rendered_frame_with_a_parallel_taxiway_at_600_m_is_not_paired_with_it
     scene = SceneParams(surroundings="sand", monochrome=True)
     with FrameRenderer(scene, camera, scenario.runway) as renderer:
         rgb = renderer.render(state.p_runway_m[0], R[0], frame_seed=0)
-    result, errors = _detected_with_errors(rgb, camera, state, labels)
+    result, errors = detected_with_errors(rgb, camera, state, labels)
     assert result.found, result.reason
     assert errors["edge_px"] < 1.0, errors
     assert not errors["gross"], errors
@@ -233,43 +234,6 @@ def test_aiming_point_marks_far_out_are_not_taken_for_the_threshold_marking():
     assert worst and max(worst) < 2.0, worst
 
 
-def _detected_with_errors(rgb, camera, state, labels):
-    """``detect_runway`` on one frame (acquisition, the state's inertial roll and pitch) and its
-    errors against the exact labels (:func:`visland.detection.accuracy.frame_errors`)."""
-    from visland.detection import detect_runway
-    from visland.detection.accuracy import frame_errors
-    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
-    return result, frame_errors(result, camera, labels.corners_uv[0], labels.corners_visible[0],
-                                float(state.dpsi_rad[0]))
-
-
-def _study_frame(scene_overrides: dict, runway_m: tuple, distance_m: float, size: int):
-    """The robustness study's frame (benchmarks/detection_robustness.py): thesis-3 flown with the
-    given runway, the 25 Hz frame nearest ``distance_m`` before the threshold rendered by visland's
-    renderer with that frame's seed; exact labels from :func:`visland.features.ideal_features`."""
-    import os
-    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from visland.camera import CameraModel
-    from visland.features import batch_R_camera_from_runway, ideal_features
-    from visland.flight import simulate_flight
-    from visland.render import FrameRenderer, SceneParams
-    from visland.runway import Runway
-    from visland.scenarios import resolve_scenario, with_runway
-    from visland.simulate import frame_times
-
-    runway = Runway(length_m=runway_m[0], width_m=runway_m[1])
-    trajectory = simulate_flight(with_runway(resolve_scenario("thesis-3"), runway))
-    times = frame_times(trajectory.duration_s, 25.0)
-    index = int(np.argmin(np.abs(-trajectory.at(times).p_runway_m[:, 0] - distance_m)))
-    state = trajectory.at(times[index:index + 1])
-    camera = CameraModel.default(size)
-    labels = ideal_features(state, runway, camera)
-    R = batch_R_camera_from_runway(state.roll_rad, state.pitch_rad, state.dpsi_rad, camera.mount_rpy_rad)
-    with FrameRenderer(SceneParams(**scene_overrides), camera, runway) as renderer:
-        rgb = renderer.render(state.p_runway_m[0], R[0], frame_seed=index)
-    return rgb, camera, state, labels
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("scene, distance", [({"surface": "concrete", "surroundings": "dry"}, 1500.0),
                                              ({"surface": "concrete", "surroundings": "dry"}, 900.0),
@@ -281,8 +245,8 @@ def test_a_runway_beside_a_more_contrasted_parallel_taxiway_is_found_in_the_chro
     runway was not a convincing strip in grey levels and the taxiway was taken (edges 65 px
     off). In the chroma the runway is a strip of low chroma, wider than the taxiway beside it:
     it must be found, both edges within 1 px of the exact labels, no corner more than 5 px off."""
-    rgb, camera, state, labels = _study_frame(scene, (3000.0, 45.0), distance, 1024)
-    result, errors = _detected_with_errors(rgb, camera, state, labels)
+    rgb, camera, state, labels = study_frame_at(scene, (3000.0, 45.0), distance, 1024)
+    result, errors = detected_with_errors(rgb, camera, state, labels)
     assert result.found, result.reason
     assert errors["edge_px"] < 1.0, errors
     assert not errors["gross"], errors
@@ -298,9 +262,9 @@ def test_a_bright_building_ranked_first_does_not_hand_the_runway_to_the_taxiway(
     (found, edges 31.6 px off). The runway is wider than the taxiway beside it and must be
     measured in its place: found, both edges within 1 px of the exact labels, no corner more
     than 5 px off."""
-    rgb, camera, state, labels = _study_frame({"surface": "concrete", "surroundings": "dry"}, (3000.0, 45.0),
+    rgb, camera, state, labels = study_frame_at({"surface": "concrete", "surroundings": "dry"}, (3000.0, 45.0),
                                               2500.0, 512)
-    result, errors = _detected_with_errors(rgb, camera, state, labels)
+    result, errors = detected_with_errors(rgb, camera, state, labels)
     assert result.found, result.reason
     assert errors["edge_px"] < 1.0, errors
     assert not errors["gross"], errors
@@ -318,8 +282,8 @@ def test_a_displaced_threshold_too_far_to_resolve_its_stripes_is_placed_or_withh
     pavement's own step: the threshold cannot be placed and must be withheld, not put at the
     pavement's start."""
     scene = {"markings": "displaced", "pre_threshold_m": 300.0}
-    rgb, camera, state, labels = _study_frame(scene, (3000.0, 45.0), distance, 1024)
-    result, errors = _detected_with_errors(rgb, camera, state, labels)
+    rgb, camera, state, labels = study_frame_at(scene, (3000.0, 45.0), distance, 1024)
+    result, errors = detected_with_errors(rgb, camera, state, labels)
     assert result.found, result.reason
     assert not errors["gross"], errors
     if placed:
@@ -339,12 +303,9 @@ def test_threshold_stripes_blurred_onto_one_line_mark_a_blast_pad_threshold(fram
     found and the threshold was put where the pavement begins, 7.0-7.4 px before the true one
     (found, no doubt: 5 gross frames once the sightings at 3.6 km, 10 s earlier, had left the
     sequence's memory). Both near corners must be within 1 px of the exact labels."""
-    from tests.helpers.study_frames import study_errors, study_frames
-    from visland.detection import detect_runway
     [(rgb, state, labels, _)], camera = study_frames({"markings": "blast_pad", "pre_threshold_m": 120.0},
                                                        (3000.0, 45.0), [frame], size=2048)
-    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
-    errors = study_errors(result, camera, state, labels)
+    result, errors = detected_with_errors(rgb, camera, state, labels)
     assert result.found and result.corners_found[:2].all(), result.reason
     assert errors["near_px"] < 1.0, (errors, result.reason)
     assert result.threshold_method.startswith("marking"), result.reason

@@ -12,7 +12,7 @@ the same frame without the taxiways fails the same way, without the rubber it do
 import numpy as np
 import pytest
 
-from tests.detection.test_detection_acquisition import _study_frame
+from tests.helpers.study_frames import detected_with_errors, study_frame_at
 
 OBLIQUE_SHORT = {"taxiways": "oblique", "surface": "concrete"}
 
@@ -24,12 +24,8 @@ def test_the_threshold_is_where_the_clean_concrete_ends_not_where_the_rubber_doe
     and 20.6 px along the runway from the true one (found, confidence 0.89 and 0.82; at 600 m
     the far corners 22 px off as well); at 450 m the threshold was not found. Both thresholds and the runway's end
     must be within 1 px of the exact labels."""
-    from visland.detection import detect_runway
-    from visland.detection.accuracy import frame_errors
-
-    rgb, camera, state, labels = _study_frame(OBLIQUE_SHORT, (1200.0, 23.0), distance, 1024)
-    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
-    errors = frame_errors(result, camera, labels.corners_uv[0], labels.corners_visible[0], float(state.dpsi_rad[0]))
+    rgb, camera, state, labels = study_frame_at(OBLIQUE_SHORT, (1200.0, 23.0), distance, 1024)
+    result, errors = detected_with_errors(rgb, camera, state, labels)
     assert result.found, result.reason
     assert not errors["gross"], errors
     assert result.corners_found.all(), result.reason
