@@ -36,7 +36,7 @@ from visland.detection.pencil import FloatFrame
 from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of,
                                      net_step, refine_line, sample_profiles)
 from visland.detection.result import DetectionResult, not_found
-from visland.detection.threshold_marking import ground_begins, threshold_marking
+from visland.detection.threshold_marking import ground_begins, marked_at_start, threshold_marking
 from visland.detection.transverse import find_transverse_line, pavement_beyond_edges, surface_extent
 from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
                                          wider_strip_beside)
@@ -778,6 +778,7 @@ class _TransverseLines:
     notes: list
     threshold_method: str = ""
     pavement_marking_widths: float = math.nan
+    threshold_marked: bool = False
 
 
 def _corners_withheld(transverse: _TransverseLines, note: str) -> _TransverseLines:
@@ -859,7 +860,8 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
         vanishing_point_uv=vp_uv, horizon=ctx.horizon_line, dF_px=dF_px, dpsi_rad=dpsi_rad, roll_rad=ctx.roll,
         pitch_rad=ctx.pitch, mode=mode, roi=tuple(int(a) for a in roi), image_size=(camera.width, camera.height),
         elapsed_s=time.perf_counter() - ctx.start, notes=tuple(notes), threshold_method=transverse.threshold_method,
-        pavement_marking_widths=transverse.pavement_marking_widths, doubtful_corners_uv=doubtful), None
+        pavement_marking_widths=transverse.pavement_marking_widths, threshold_marked=transverse.threshold_marked,
+        doubtful_corners_uv=doubtful), None
 
 
 def _extent_image(ctx: _Context, hypothesis: RunwayHypothesis):
@@ -1213,6 +1215,9 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             notes.append(f"threshold withheld: its step continues beyond the runway's {' and '.join(beyond)} "
                          f"edge{'s' if len(beyond) > 1 else ''} (a pavement crossing or joining the runway there)")
             near = None
+    threshold_marked = near is not None and (near.method.startswith("marking") or marked_at_start(
+        ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px, 1.0, min_step,
+        pavement_step=near.step if math.isfinite(near.step) else 0.0, params=params))
     if near is not None and far is not None and far.spans:
         # a runway is a long strip (params.min_length_to_width widths at least): an "end" found
         # nearer than that past the threshold is a marking (the far side of the threshold stripes
@@ -1242,7 +1247,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
                 corners[index] = uv
                 corners_found[index] = True
     return _TransverseLines(corners, corners_found, threshold_line, end_line, notes,
-                            near.method if near is not None else "", marking_widths)
+                            near.method if near is not None else "", marking_widths, threshold_marked)
 
 
 def _confidence(params: DetectorParams, pair: _EdgePair,

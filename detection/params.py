@@ -87,6 +87,8 @@ NOT_SCALED_PX = (
     "boundary_stripe_shift_scale_px",
     # candidate lines' sub-pixel profile lengths and floors (candidates)
     "check_min_span_px", "check_transition_halfspan_px", "check_transition_side_px", "check_line_min_sigma_px",
+    # the blur of the ground's step into the pavement, read past (threshold_marking.marked_at_start)
+    "marked_start_skip_px",
     # the measurement's sub-pixel floors, blur and resolution limits (detector)
     "edge_band_min_px", "edge_image_margin_px", "edge_blur_px", "chroma_resolved_stripe_px", "vp_line_min_sigma_px",
     "centre_band_min_px", "centre_min_width_px", "confidence_residual_px",
@@ -494,6 +496,20 @@ class DetectorParams(ParamsFile):
         robustness study's overcast frames at 2048 px was acquired at 2.4 km, 1.33 heights out
         (no geometry refuses it there), and tracked as its ``k_C`` grew with the descent (3 heights
         at about 1 km, 5.8 at 250 m), edges 90-130 px off; with this check it is dropped at 3.
+    unconfirmed_max_lateral_heights : float
+        Over a sequence (:class:`~visland.detection.sequence.DetectionSequence`), a strip followed
+        since its acquisition is reported only once it is confirmed as the runway approached: it
+        showed a threshold marking (``marked_start_widths``; not a centre line: taxiways carry
+        one) in one of its frames, or
+        its centre line lay within this many camera heights of the aircraft (or the aircraft
+        over it, ``max_lateral_heights_widths``). Until then it is followed but reported not
+        found, saying why. One height is 3 deg off the centre line seen from the threshold on a
+        3 deg descent, about a stabilised approach's limit; the overcast taxiway above was
+        acquired 1.33 heights out, its runway's own edges lost in the fog, and never came
+        nearer. A runway approached from farther out (thesis-4 starts 1.69 heights out) is
+        reported from its first threshold marking seen or once the aircraft is within this many
+        heights; while a strip is not confirmed the whole frame is searched afresh too, and a
+        confirmed strip found there replaces it.
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
@@ -653,6 +669,16 @@ class DetectorParams(ParamsFile):
         displaced threshold's bar (4.5 m long) crosses the width as stripes do (the robustness
         study at 2048 px, 600 to 390 m before it: taken for the stripes, the threshold put 6-12 px
         before the bar).
+    marked_start_widths, marked_start_skip_px : float
+        The threshold's own marking at the pavement's start (the stripes, 6 m in and 30 m long
+        at least, ICAO Annex 14 5.2.4; FAA 20 ft and 150 ft; or a bar) is looked for over this
+        many runway widths from the threshold found there (1.6: a 23 m runway's first 36 m), from
+        this many pixels of depth inside it (where a brighter ground's blur adds less than half
+        its step)
+        (:func:`visland.detection.threshold_marking.marked_at_start`). Seen, it tells a runway
+        from a taxiway or road (none carries one), whatever the distance:
+        :class:`~visland.detection.sequence.DetectionSequence` then reports a strip
+        followed well beside the approach (``unconfirmed_max_lateral_heights``).
     confidence_residual_px : float
         The confidence's straightness term is ``exp(-(r / this)^2 / 2)``, r the larger edge RMS
         residual (pixels).
@@ -923,6 +949,7 @@ class DetectorParams(ParamsFile):
     max_lateral_widths: float = 30.0
     max_lateral_heights: float = 3.0
     max_lateral_heights_widths: float = 1.5
+    unconfirmed_max_lateral_heights: float = 1.0
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     corner_min_confidence: float = 0.4
@@ -986,6 +1013,8 @@ class DetectorParams(ParamsFile):
     marking_unresolved_plain_px: float = 3.0
     marking_bright_percentile: float = 99.0
     marking_quarter_min_share: float = 0.15
+    marked_start_widths: float = 1.6
+    marked_start_skip_px: float = 0.5
     marking_bar_coverage: float = 0.8
     marking_min_stripes: int = 3
     marking_stripes_min_widths: float = 0.3
@@ -1102,7 +1131,7 @@ class DetectorParams(ParamsFile):
         "denoise_min_noise": (0.0, 255.0), "denoise_sigma_px": (0.0, 10.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
-        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
         "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
         "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
         "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),
@@ -1130,7 +1159,7 @@ class DetectorParams(ParamsFile):
         "marking_column_span": (0.0, 1.0), "marking_min_resolved_px": (0.0, 1000.0),
         "marking_unresolved_min_span_px": (0.0, 10000.0), "marking_start_fraction": (0.0, 10.0),
         "marking_unresolved_coverage": (0.0, 1.0), "marking_unresolved_plain_px": (0.0, 1000.0),
-        "marking_bright_percentile": (50.0, 100.0), "marking_quarter_min_share": (0.0, 1.0),
+        "marking_bright_percentile": (50.0, 100.0), "marking_quarter_min_share": (0.0, 1.0), "marked_start_widths": (0.0, 100.0), "marked_start_skip_px": (0.0, 100.0),
         "marking_bar_coverage": (0.0, 1.0), "marking_min_stripes": (1, 1000, "int"), "marking_stripes_min_widths": (0.0, 100.0), "marking_stripes_resolved_px": (0.0, 1000.0), "confidence_residual_px": (0.01, 100.0),
         "confidence_vp_sigmas": (0.1, 100.0), "confidence_contrast_factor": (0.1, 1000.0),
         "confidence_without_centre": (0.0, 1.0),

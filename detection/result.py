@@ -82,6 +82,11 @@ class DetectionResult:
         Runway widths from the pavement's start to a threshold marking seen inside it (a
         displaced threshold's bar, stripes after a blast pad), placed or not; NaN when none was
         seen.
+    threshold_marked : bool
+        The threshold carries a threshold marking: stripes or a bar across the width at the
+        pavement's start (:func:`visland.detection.threshold_marking.marked_at_start`), or the
+        marking inside the pavement it was placed on. A runway's mark, which a taxiway or road
+        does not carry.
     doubtful_corners_uv : ndarray, shape (k, 2)
         Corners measured but withheld from ``corners_uv`` because the edges they lie on are of
         low confidence (``DetectorParams.corner_min_confidence``): never a measurement, only what
@@ -112,6 +117,7 @@ class DetectionResult:
     notes: tuple = ()
     threshold_method: str = ""
     pavement_marking_widths: float = math.nan
+    threshold_marked: bool = False
     doubtful_corners_uv: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     @property

@@ -143,9 +143,10 @@ def test_a_new_track_replaces_a_wrong_one_after_three_agreeing_rejections(script
     assert not any(withheld[5:])                  # ... until three agreeing ones start a new one
 
 
-def _runway_result(states, i, runway, camera, lateral_shift_m=0.0):
+def _runway_result(states, i, runway, camera, lateral_shift_m=0.0, marked=False):
     """A found DetectionResult whose edges are the exact ones of ``runway`` shifted sideways
-    (a ground object parallel to the runway: same vanishing point)."""
+    (a ground object parallel to the runway: same vanishing point); ``marked``: its threshold
+    carries a threshold marking (``threshold_marked``)."""
     from dataclasses import replace as _replace
 
     import numpy as _np
@@ -156,8 +157,9 @@ def _runway_result(states, i, runway, camera, lateral_shift_m=0.0):
     shifted = _replace(shifted, p_runway_m=shifted.p_runway_m - _np.array([0.0, lateral_shift_m, 0.0]))
     corners = ideal_features(shifted, runway, camera).corners_uv[0]
     segments = {"left": _np.array([corners[2], corners[0]]), "right": _np.array([corners[3], corners[1]])}
-    return DetectionResult(found=True, reason="", confidence=0.9, segments_uv=segments,
-                           roll_rad=float(shifted.roll_rad[0]), pitch_rad=float(shifted.pitch_rad[0]))
+    result = DetectionResult(found=True, reason="", confidence=0.9, segments_uv=segments,
+                             roll_rad=float(shifted.roll_rad[0]), pitch_rad=float(shifted.pitch_rad[0]))
+    return replace(result, threshold_marked=marked)
 
 
 def test_the_runway_s_ground_geometry_tells_it_from_a_parallel_strip():
@@ -265,7 +267,8 @@ def test_a_reacquisition_is_checked_where_the_runway_has_moved_since(monkeypatch
     k_now = states.p_runway_m[again, 1] / -states.p_runway_m[again, 2]
     assert abs(k_now - k_then) > 0.45                 # the fixed limit: 0.1 + 0.05 * 5 s + 0.1 |k_then| = 0.44
     for window, kept in ((3.0, beside_m == 0.0), (0.0, False)):
-        script = ([_runway_result(states, i, scenario.runway, camera) for i in followed]
+        # (marked: the runway lies 1.1-1.5 heights out, reported once a marking is seen)
+        script = ([_runway_result(states, i, scenario.runway, camera, marked=True) for i in followed]
                   + [not_found("lost")] * len(lost) + [_runway_result(states, again, scenario.runway, camera, beside_m)])
         # a refused re-acquisition is tried once more from the last good detection: nothing there
         monkeypatch.setattr(seq_module, "detect_runway",
@@ -355,3 +358,109 @@ def test_a_strip_more_than_three_heights_to_the_side_is_not_the_runway_being_app
     assert unchecked.found, unchecked.reason
     image, camera = _beside(1.5)
     assert detect_runway(image, camera, 0.0, math.radians(-2.0)).found
+
+
+def _beside_runway_frames(beside_m: float, marked: bool):
+    """thesis-3 from 2.4 km at 5 Hz (20 frames, 2048 px camera): the states, the frames' indices
+    and, per frame, a result on the exact edges of a strip ``beside_m`` metres beside the runway."""
+    from visland.flight import simulate_flight
+    from visland.scenarios import get_scenario
+    scenario = get_scenario("thesis-3")
+    states = simulate_flight(scenario)
+    camera = CameraModel.default(2048)
+    step = int(round(0.2 / (states.t_s[1] - states.t_s[0])))
+    first = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 2400.0)))
+    frames = [first + k * step for k in range(20)]
+    return states, camera, frames, [_runway_result(states, i, scenario.runway, camera, beside_m, marked)
+                                    for i in frames]
+
+
+def _replay(monkeypatch, states, camera, frames, tracked, acquired):
+    """Run a DetectionSequence over ``frames``: the detector returns ``tracked[k]`` when given a
+    prior and ``acquired[k]`` when searching afresh. The results and each tracking call's prior."""
+    frame, priors = [0], []
+
+    def fake(image, camera, roll, pitch, params=None, previous=None):
+        if previous is None:
+            return acquired[frame[0]]
+        priors.append((frame[0], previous))
+        return tracked[frame[0]]
+    monkeypatch.setattr(seq_module, "detect_runway", fake)
+    sequence = seq_module.DetectionSequence(camera)
+    image = np.zeros((2048, 2048), np.uint8)
+    results = []
+    for k, i in enumerate(frames):
+        frame[0] = k
+        results.append(sequence(image, float(states.roll_rad[i]), float(states.pitch_rad[i]), float(states.t_s[i])))
+    return results, priors
+
+
+@pytest.mark.parametrize("beside_m, marked, reported", [(185.0, False, False), (185.0, True, True),
+                                                          (0.0, False, True)])
+def test_an_unmarked_strip_well_beside_the_approach_is_followed_but_not_reported(monkeypatch, beside_m, marked,
+                                                                                  reported):
+    """A strip 185 m beside the runway (the robustness study's overcast taxiway, acquired in fog
+    where the runway's edges gave no segment) lies 1.2-1.8 camera heights out, k_C = Y / h read
+    off its exact edges; unmarked it is followed (each frame's prior is the last one measured,
+    and the whole frame, searched again each frame, finds it again) but never reported found;
+    with a threshold marking it is (thesis-4's runway starts 1.69 heights out); the runway itself,
+    unmarked, is reported from the first frame, the aircraft within a height of its centre line."""
+    states, camera, frames, script = _beside_runway_frames(beside_m, marked)
+    results, priors = _replay(monkeypatch, states, camera, frames, script, script)
+    lateral = np.abs(states.p_runway_m[frames, 1] - beside_m) / -states.p_runway_m[frames, 2]
+    if beside_m:
+        assert lateral.min() > 1.1, lateral
+    else:
+        assert lateral.max() < 1.0, lateral
+    assert [r.found for r in results] == [reported] * len(frames), [r.reason for r in results]
+    assert [k for k, _ in priors] == list(range(1, len(frames)))                 # followed all along
+    assert all(prior is script[k - 1] for k, prior in priors)
+    if not reported:
+        assert all(r.reason.startswith("not reported: the strip followed lies") for r in results)
+        assert "has shown no threshold marking" in results[0].reason
+
+
+@pytest.mark.parametrize("frames_found", [2, 1])
+def test_a_marked_runway_found_afresh_replaces_an_unconfirmed_strip(monkeypatch, frames_found):
+    """Following the unmarked strip 185 m out, each frame is searched afresh too: once that search
+    finds the runway with its threshold marking in two frames running (here the 8th and 9th; the
+    overcast frames' single-frame search found it from 1.9 km), the runway replaces the strip, is
+    reported and followed from then on. Found in one frame only (a texture's end read as paint
+    can be), it replaces nothing."""
+    states, camera, frames, beside = _beside_runway_frames(185.0, False)
+    _, _, _, runway = _beside_runway_frames(0.0, True)
+    switch = 8
+    # the fresh search finds the runway from the 8th frame on, or in the 8th only
+    acquired = beside[:switch] + (runway[switch:] if frames_found == 2 else runway[switch:switch + 1]
+                                  + beside[switch + 1:])
+    replaced = switch + 1
+    tracked = beside[:replaced + 1] + runway[replaced + 1:] if frames_found == 2 else beside
+    results, priors = _replay(monkeypatch, states, camera, frames, tracked, acquired)
+    if frames_found == 2:
+        assert [r.found for r in results] == [False] * replaced + [True] * (len(frames) - replaced)
+        assert results[replaced] is runway[replaced]
+        assert all(prior is runway[k - 1] for k, prior in priors if k > replaced + 1)
+    else:
+        assert not any(r.found for r in results), [r.reason for r in results]
+        assert all(prior is beside[k - 1] for k, prior in priors)
+
+
+def test_a_strip_confirmed_by_its_place_alone_does_not_replace_the_one_followed(monkeypatch):
+    """thesis-3 starts 205 m right of the runway, over a parallel taxiway 185 m out ('concrete,
+    sand, mono'): the runway is followed, 1.0-1.1 heights out and unmarked, not reported; the
+    fresh search of each frame finds the taxiway, within a height of the aircraft, unmarked: it
+    must not replace the runway (it did, and was tracked to the end: 180 gross frames)."""
+    states, camera, frames, runway = _beside_runway_frames(0.0, False)
+    first = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 3650.0)))
+    step = frames[1] - frames[0]
+    frames = [first + k * step for k in range(10)]
+    from visland.scenarios import get_scenario
+    scenario = get_scenario("thesis-3")
+    runway = [_runway_result(states, i, scenario.runway, camera) for i in frames]
+    taxiway = [_runway_result(states, i, scenario.runway, camera, 185.0) for i in frames]
+    lateral = np.abs(states.p_runway_m[frames, 1]) / -states.p_runway_m[frames, 2]
+    assert lateral.min() > 1.0, lateral
+    # the first frame's acquisition is the runway; every later fresh search finds the taxiway
+    results, priors = _replay(monkeypatch, states, camera, frames, runway, runway[:1] + taxiway[1:])
+    assert not any(r.found for r in results), [r.reason for r in results]
+    assert all(prior is runway[k - 1] for k, prior in priors)                     # the runway followed

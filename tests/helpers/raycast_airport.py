@@ -78,6 +78,8 @@ class PaintedAirport:
     #: just before the threshold (a displaced threshold's, ICAO Annex 14 figure 5-4): 4 m long,
     #: 3 m wide, 9 m apart, short marks across the width that are no threshold stripes
     threshold_heads: bool = False
+    #: False: no threshold stripes (piano keys) at either end, the rest of the markings kept
+    threshold_stripes: bool = True
     #: grey level of the distance haze (and of rays that reach no ground)
     haze_grey: float = 165.0
 
@@ -129,7 +131,7 @@ class PaintedAirport:
         if self.side_stripes:
             for sign in (-1.0, 1.0):
                 marks.append((L / 2, sign * (half - 0.45), L / 2, 0.45, 0.0, self.marking_grey))
-        for x0 in (6.0, L - 36.0):                                   # threshold piano keys
+        for x0 in (6.0, L - 36.0) if self.threshold_stripes else ():  # threshold piano keys
             for i in range(6):
                 for sign in (-1.0, 1.0):
                     y_c = sign * (1.8 + 3.6 * i + 0.9)
