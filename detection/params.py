@@ -508,8 +508,8 @@ class DetectorParams(ParamsFile):
         acquired 1.33 heights out, its runway's own edges lost in the fog, and never came
         nearer. A runway approached from farther out (thesis-4 starts 1.69 heights out) is
         reported from its first threshold marking seen or once the aircraft is within this many
-        heights; while a strip is not confirmed the whole frame is searched afresh too, and a
-        confirmed strip found there replaces it.
+        heights; while a strip is not confirmed the whole frame is searched afresh too, and
+        another strip found there with a threshold marking in two frames running replaces it.
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
