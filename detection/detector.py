@@ -516,7 +516,8 @@ def _predict(previous: DetectionResult, ctx: _Context, ground):
         return None, None
     width_near = abs(k_right - k_left) * d_near
     sigma = params.tracking_sigma_px + params.tracking_sigma_width_fraction * width_near
-    prediction = Prediction(s0=s0, k_left=k_left, k_right=k_right, d_far=d_far, d_near=d_near, sigma_px=sigma)
+    prediction = Prediction(s0=s0, k_left=k_left, k_right=k_right, d_far=d_far, d_near=d_near, sigma_px=sigma,
+                            threshold_marked=bool(previous.threshold_marked))
     return prediction, roi
 
 
@@ -836,7 +837,8 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     confidence, edges_confidence, why = _confidence(ctx.params, pair, centre_fit)
     if confidence is None:
         return None, why
-    transverse = _threshold_and_end(ctx, pair, vp_uv, bottom_depth, _extent_image(ctx, hypothesis))
+    transverse = _threshold_and_end(ctx, pair, vp_uv, bottom_depth, _extent_image(ctx, hypothesis),
+                                    marked=prediction is not None and prediction.threshold_marked)
     doubtful = np.zeros((0, 2))
     if edges_confidence < ctx.params.corner_min_confidence and transverse.corners_found.any():
         doubtful = transverse.corners_uv[transverse.corners_found]
@@ -1095,11 +1097,13 @@ def _heading(ctx: _Context, pair: _EdgePair, centre_fit: LineFit | None):
 
 
 def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom_depth: float,
-                       extent_image=None) -> _TransverseLines:
+                       extent_image=None, marked: bool = False) -> _TransverseLines:
     """The threshold and the runway end: where the runway's surface ends along it, the transverse
     steps there through V2 (:mod:`visland.detection.transverse`), the threshold moved to where
     the pavement ends or to a threshold marking (:mod:`visland.detection.threshold_marking`),
-    the runway end withheld when nearer than a runway's length; their corners where in the image."""
+    the runway end withheld when nearer than a runway's length; their corners where in the image.
+    ``marked``: the strip, followed from the previous frame, was seen with its threshold marking
+    there (a threshold found now carries it without reading it again, a millisecond per frame)."""
     horizon, params, camera = ctx.horizon, ctx.params, ctx.camera
     fits, d_far, d_near, d_mid = pair.fits, pair.d_far, pair.d_near, pair.d_mid
     s0_vp = float(horizon.to_sd(vp_uv)[0])
@@ -1215,7 +1219,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             notes.append(f"threshold withheld: its step continues beyond the runway's {' and '.join(beyond)} "
                          f"edge{'s' if len(beyond) > 1 else ''} (a pavement crossing or joining the runway there)")
             near = None
-    threshold_marked = near is not None and (near.method.startswith("marking") or marked_at_start(
+    threshold_marked = near is not None and (marked or near.method.startswith("marking") or marked_at_start(
         ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px, 1.0, min_step,
         pavement_step=near.step if math.isfinite(near.step) else 0.0, params=params))
     if near is not None and far is not None and far.spans:

@@ -86,7 +86,8 @@ class DetectionResult:
         The threshold carries a threshold marking: stripes or a bar across the width at the
         pavement's start (:func:`visland.detection.threshold_marking.marked_at_start`), or the
         marking inside the pavement it was placed on. A runway's mark, which a taxiway or road
-        does not carry.
+        does not carry. Tracking the strip of a previous detection that saw it, it is carried,
+        not read again (whenever a threshold is found).
     doubtful_corners_uv : ndarray, shape (k, 2)
         Corners measured but withheld from ``corners_uv`` because the edges they lie on are of
         low confidence (``DetectorParams.corner_min_confidence``): never a measurement, only what

@@ -510,12 +510,12 @@ def _ground_geometry(result: DetectionResult, camera: CameraModel):
 
 
 def _shows_runway_marking(result: DetectionResult) -> bool:
-    """Whether ``result`` saw a runway's own marking: the threshold's (``threshold_marked``), or a
-    threshold marking inside the pavement (a displaced threshold's bar, the stripes after a blast
-    pad). Not a centre line: taxiways carry one too (the robustness study's overcast taxiway, its
-    centre line found from 1.0 km)."""
-    return (result.threshold_marked or result.threshold_method.startswith("marking")
-            or math.isfinite(result.pavement_marking_widths))
+    """Whether ``result`` saw a runway's own marking: the threshold's (``threshold_marked``, which
+    includes a threshold placed on a marking inside the pavement), or a threshold marking inside
+    the pavement it could not place (a displaced threshold's bar far out). Not a centre line:
+    taxiways carry one too (the robustness study's overcast taxiway, its centre line found from
+    1.0 km)."""
+    return result.threshold_marked or math.isfinite(result.pavement_marking_widths)
 
 
 def _lateral_offset(result: DetectionResult, camera: CameraModel) -> tuple[float, float] | None:

@@ -55,6 +55,10 @@ class Prediction:
         Depths (pixels below the horizon) of the far and near ends of the edges' support.
     sigma_px : float
         One-sigma motion (pixels) of the runway from the prediction, widening the search band.
+    threshold_marked : bool
+        The previous detection's threshold carried its marking
+        (:attr:`~visland.detection.result.DetectionResult.threshold_marked`): the strip followed
+        keeps it, and it is not read again.
     """
 
     s0: float
@@ -63,6 +67,7 @@ class Prediction:
     d_far: float
     d_near: float
     sigma_px: float
+    threshold_marked: bool = False
 
 
 @dataclass(frozen=True)
