@@ -17,8 +17,11 @@ dropped from an otherwise good detection (``max_threshold_jump_*``). The thresho
 followed as a track: at a steady ground speed the reciprocal of its width in pixels,
 ``1 / w = x / (f W)``, falls linearly with time whatever the height, so the widths of the last
 ``threshold_track_s`` seconds predict the next one; a threshold off that prediction (a marking
-or a pavement joining the runway taken for it) has its corners withheld, and three rejections in
-a row that agree with each other start the track afresh. Flying toward the threshold its
+or a pavement joining the runway taken for it) has its corners withheld, and rejections in a
+row that agree with each other start the track afresh once there are at least three of them and
+as many as the widths the track still holds in its window (the track's old widths age out of it
+while the rejections come: a track that was the wrong object is replaced in about half the
+window). Flying toward the threshold its
 width only grows: where the track holds fewer than three widths, one narrower than the last
 threshold accepted in the last ``threshold_shrink_memory_s`` seconds (less the same tolerance) is
 withheld (below 100 ft, once the threshold had left the frame below, the touchdown zone's bars
@@ -442,8 +445,13 @@ class DetectionSequence:
                 rejected = [(t, w) for t, w in self.threshold_rejected if t_s - p.threshold_track_s <= t < t_s]
                 rejected.append((t_s, width))
                 self.threshold_rejected = rejected
-                if len(rejected) >= 3 and _consistent(rejected, p):
-                    # the track itself was the wrong object (or the runway was lost and found again)
+                if len(rejected) >= max(3, len(track)) and _consistent(rejected, p):
+                    # the track itself was the wrong object (or the runway was lost and found
+                    # again): once the rejections outnumber the widths the track still holds in
+                    # its window. Three alone were not enough where a texture's end 17 px beyond
+                    # the threshold came three frames running while the track held five widths
+                    # a pixel off ('oblique, 1200x23' at 1.3 km, 2048 px: the track restarted on
+                    # it and two frames were reported 17.5 px off)
                     self.threshold_track = rejected
                     self.threshold_rejected = []
                     self.last_threshold = (t_s, width)

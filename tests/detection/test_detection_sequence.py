@@ -143,6 +143,30 @@ def test_a_new_track_replaces_a_wrong_one_after_three_agreeing_rejections(script
     assert not any(withheld[5:])                  # ... until three agreeing ones start a new one
 
 
+def test_three_agreeing_rejections_do_not_replace_a_longer_track(scripted):
+    # six frames follow the threshold; then a texture's end 250 m beyond it is found three frames
+    # running (narrower, agreeing with each other: a track of its own), then the threshold again
+    # ('oblique, 1200x23' at 1.3 km, 2048 px: the old rule restarted the track on the texture)
+    right = _widths_of_an_approach(10)
+    beyond = CAMERA.fx * 40.0 / (1500.0 - 70.0 * 0.2 * np.arange(10) + 250.0)
+    scripted([_result(width=w) for w in list(right[:6]) + list(beyond[6:9]) + [right[9]]])
+    results = _run(seq_module.DetectionSequence(CAMERA), 10, dt=0.2)
+    withheld = [not r.corners_found[:2].any() for r in results]
+    assert withheld == [False] * 6 + [True] * 3 + [False]
+
+
+def test_a_track_is_replaced_once_the_rejections_outnumber_its_widths_in_the_window(scripted):
+    # the same, the texture's end kept: the six old widths age out of the 2 s window (five left
+    # at frame 11) while the rejections grow (six at frame 11), and the new track takes over
+    right = _widths_of_an_approach(6)
+    beyond = CAMERA.fx * 40.0 / (1500.0 - 70.0 * 0.2 * np.arange(14) + 250.0)
+    scripted([_result(width=w) for w in list(right) + list(beyond[6:])])
+    params = replace(DetectorParams(), threshold_track_s=2.0)
+    results = _run(seq_module.DetectionSequence(CAMERA, params=params), 14, dt=0.2)
+    withheld = [not r.corners_found[:2].any() for r in results]
+    assert withheld == [False] * 6 + [True] * 5 + [False] * 3
+
+
 def _runway_result(states, i, runway, camera, lateral_shift_m=0.0, marked=False):
     """A found DetectionResult whose edges are the exact ones of ``runway`` shifted sideways
     (a ground object parallel to the runway: same vanishing point); ``marked``: its threshold
