@@ -57,6 +57,14 @@ class SurfaceExtent(tuple):
         return extent
 
 
+#: Departures from the ground of the level and of the texture profiles this close (pixels of
+#: depth) are one boundary seen twice.
+SAME_DEPARTURE_PX = 1.5
+#: The level's departure places such a boundary when its step is at least this many times the
+#: texture's (the pavement's own level change, not its stripes'): :func:`find_transverse_line`.
+LEVEL_OVER_TEXTURE = 2.0
+
+
 @dataclass(frozen=True)
 class TransverseLine:
     """A threshold or runway-end line.
@@ -509,8 +517,21 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
             towards_surface = (not math.isfinite(surface_level)
                                or ((extreme - ground_level) * (surface_level - ground_level) > 0
                                    and abs(extreme - ground_level) >= 0.3 * abs(surface_level - ground_level)))
-            textured = any(abs(t[0] - depth_i) <= 1.5 for t in texture_departures)
+            textured = any(abs(t[0] - depth_i) <= SAME_DEPARTURE_PX for t in texture_departures)
             if towards_surface or textured:
+                if (texture_departures and abs(texture_departures[0][0] - depth_i) <= SAME_DEPARTURE_PX
+                        and abs(step_i) >= LEVEL_OVER_TEXTURE * abs(texture_departures[0][1])):
+                    # the texture's and the level's departures are one boundary, and the
+                    # pavement's level differs from the ground's far more than the surface
+                    # varies across the lines: the level places that boundary. The spread across
+                    # a transverse line through the blurred boundary, which samples ground and
+                    # pavement side by side, peaks on the boundary and its half-level crossing
+                    # lies half a pixel outside (monochrome snow at 2 km, 2048 px: the level's
+                    # crossing 0.1 px from the true threshold, the spread's 0.6 px beyond it).
+                    # Where the stripes make most of the level's change (a pavement close to the
+                    # ground's grey: the ray-cast airport of the tests) the level's crossing
+                    # is pulled inside by them and the spread's is kept
+                    exits.pop(0)
                 exits.append((depth_i, step_i, significance_i, "ground-exit"))
                 break
     # far away the stripes are a band a pixel or two long whose texture rises only a few grey

@@ -142,6 +142,29 @@ def test_pavement_before_the_threshold_does_not_move_the_threshold(pre_threshold
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("distance", [3000.0, 2000.0])
+def test_the_threshold_on_a_bright_ground_is_placed_by_the_level(distance):
+    """Ray-cast airport (independent of visland's renderer), 1024 px, a dark runway on snow-like
+    ground (grey 215 against 78) with faint threshold stripes: the spread across the transverse
+    lines peaks on the blurred boundary itself and its half-level crossing lay 0.6-0.8 px
+    outside the threshold; the level's step, several times the spread's, places it."""
+    from tests.helpers.detection_frames import airport_frame
+    from tests.helpers.raycast_airport import PaintedAirport
+    from visland.camera import CameraModel
+    from visland.detection import detect_runway
+
+    camera = CameraModel.default(1024)
+    for scene in (PaintedAirport(seed=4, grass_grey=215.0, threshold_stripes=False),
+                  PaintedAirport(seed=4, grass_grey=215.0, marking_grey=110.0)):
+        image, state, labels = airport_frame("thesis-3", distance, camera, scene)
+        result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+        assert result.found and result.corners_found[:2].all(), result.reason
+        # the threshold's place along the runway: the image's v (the runway straight ahead)
+        along = np.abs(result.corners_uv[:2, 1] - labels.corners_uv[0, :2, 1])
+        assert along.max() < 0.3, (along, result.threshold_method)
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("heads", [True, False])
 def test_arrow_heads_before_a_displaced_threshold_are_not_its_stripes(heads):
     """Ray-cast airport (independent of visland's renderer), 1024 px, 400 m before a displaced
