@@ -69,8 +69,10 @@ def test_scaling_to_the_frame_size():
     # grey levels, ratios and counts do not scale
     assert (half.min_contrast, half.max_width_change, half.hough_votes) == \
         (params.min_contrast, params.max_width_change, params.hough_votes)
-    # idempotent, and back again
+    # idempotent, made once per frame size, and back again
     assert half.scaled_to(1024) is half
+    assert params.scaled_to(1024) is half and params.scaled_to(768) is not half
+    assert half == dataclasses.replace(params, **{f.name: getattr(half, f.name) for f in dataclasses.fields(half)})
     assert half.scaled_to(2048).min_edge_length_px == pytest.approx(params.min_edge_length_px)
     with pytest.raises(ValueError, match="at least 16 px"):
         params.scaled_to(8)
