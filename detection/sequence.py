@@ -16,7 +16,8 @@ that jump since the prior (the touchdown-zone bars taken for the threshold for o
 dropped from an otherwise good detection (``max_threshold_jump_*``). The threshold is also
 followed as a track: at a steady ground speed the reciprocal of its width in pixels,
 ``1 / w = x / (f W)``, falls linearly with time whatever the height, so the widths of the last
-``threshold_track_s`` seconds predict the next one; a threshold off that prediction (a marking
+``threshold_track_s`` seconds predict the next one (their mean where their scatter has ``1 / w``
+rising); a threshold off that prediction (a marking
 or a pavement joining the runway taken for it) has its corners withheld, and rejections in a
 row that agree with each other start the track afresh once there are at least three of them and
 as many as the widths the track still holds in its window (the track's old widths age out of it
@@ -439,6 +440,12 @@ class DetectionSequence:
             times = np.array([t for t, _ in track])
             inverse = np.array([1.0 / w for _, w in track])
             slope, offset = np.polyfit(times - t_s, inverse, 1)
+            if slope > 0.0:
+                # flying toward the threshold its width only grows (1 / w falls): a rising 1 / w
+                # is the widths' scatter, and extrapolated it predicts a shrinking threshold
+                # (thesis-8 at 512 px, 3.5 km: widths 9.6, 9.8, 9.1, 8.8 px predicted 7.7 px
+                # half a second on, and the next, 9.7, was withheld); their mean is predicted
+                offset = float(np.mean(inverse))
             predicted = 1.0 / offset if offset > 0 else math.inf
             tolerance = _width_tolerance(p, predicted)
             if not abs(width - predicted) <= tolerance:

@@ -116,6 +116,15 @@ def test_the_threshold_track_withholds_a_threshold_off_its_width(scripted):
     assert all(r.corners_found[:2].all() for r in results[6:])
 
 
+def test_a_track_whose_widths_shrink_by_their_scatter_predicts_their_mean(scripted):
+    # thesis-8 at 512 px, 3.5 km: four widths whose scatter makes them shrink, then the
+    # threshold again; extrapolated, the track predicted 7.7 px and withheld the 9.7 px one
+    scripted([_result(width=w) for w in (9.56, 9.81, 9.08, 8.84, 9.71)])
+    params = replace(DetectorParams(), threshold_width_tolerance_px=0.5)
+    results = _run(seq_module.DetectionSequence(CAMERA, params=params), 5, dt=0.2)
+    assert all(r.corners_found[:2].all() for r in results), results[-1].reason
+
+
 def test_a_threshold_narrower_than_one_just_accepted_is_withheld(scripted):
     # 512 px, 60 ft: the threshold seen in two frames (392 and 444 px wide, too few for a track),
     # then gone below the frame, then the touchdown zone's bars taken for it, 162 px wide
