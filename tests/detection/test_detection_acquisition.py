@@ -165,6 +165,33 @@ def test_the_threshold_on_a_bright_ground_is_placed_by_the_level(distance):
 
 
 @pytest.mark.slow
+def test_unresolved_stripes_before_a_darker_pavement_keep_the_threshold_on_the_stripes():
+    """Ray-cast airport of `benchmarks/raycast_approach.py` (grey, 2600 x 40 m, 6 km haze),
+    1024 px, 3.26 km: the stripes, unresolved, are a band brighter than the grass before the
+    darker asphalt, and the level leaves the grass downwards 1.1 px inside the threshold. The
+    spread across the lines rises at the threshold itself and places it; the level's departure
+    (the asphalt after the band) must not replace it."""
+    from dataclasses import replace
+
+    from tests.helpers.detection_frames import airport_frame
+    from tests.helpers.raycast_airport import PaintedAirport
+    from visland.camera import CameraModel
+    from visland.detection import detect_runway
+    from visland.scenarios import get_scenario
+
+    camera = CameraModel.default(1024)
+    scene = PaintedAirport(runway_length_m=2600.0, runway_width_m=40.0, seed=3, haze_range_m=6000.0,
+                           joining_taxiways=((300.0, 1, 90.0, 260.0), (450.0, -1, 35.0, 260.0)), taxiway_grey=84.0,
+                           taxiway_offset_m=-162.5)
+    runway = replace(get_scenario("thesis-1").runway, length_m=2600.0, width_m=40.0)
+    image, state, labels = airport_frame("thesis-1", 3262.4, camera, scene, runway=runway)
+    result = detect_runway(image, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    assert result.found and result.corners_found[:2].all(), result.reason
+    along = np.abs(result.corners_uv[:2, 1] - labels.corners_uv[0, :2, 1])
+    assert along.max() < 0.6, (along, result.threshold_method)
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("heads", [True, False])
 def test_arrow_heads_before_a_displaced_threshold_are_not_its_stripes(heads):
     """Ray-cast airport (independent of visland's renderer), 1024 px, 400 m before a displaced
