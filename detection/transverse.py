@@ -60,11 +60,11 @@ class SurfaceExtent(tuple):
 #: Departures from the ground of the level and of the texture profiles this close (pixels of
 #: depth) are one boundary seen twice.
 SAME_DEPARTURE_PX = 1.5
-#: The level's departure places the boundary instead of the texture's when the texture peaks this
-#: close to it (pixels of depth: on the boundary itself) and the level's step is at least
-#: ``LEVEL_OVER_TEXTURE`` times the texture's (the pavement's own level change, not its
-#: stripes'): :func:`find_transverse_line`.
-ON_BOUNDARY_PX = 0.5
+#: The level's departure places the boundary instead of the texture's when the texture departs
+#: at most this far outside it (pixels of depth: the spread's half-level crossing of the boundary
+#: sampled across) and the level's step is at least ``LEVEL_OVER_TEXTURE`` times the texture's
+#: (the pavement's own level change, not its stripes'): :func:`find_transverse_line`.
+ON_BOUNDARY_PX = 0.75
 LEVEL_OVER_TEXTURE = 2.0
 
 
@@ -523,21 +523,19 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
             textured = any(abs(t[0] - depth_i) <= SAME_DEPARTURE_PX for t in texture_departures)
             if towards_surface or textured:
                 if (texture_departures and abs(step_i) >= LEVEL_OVER_TEXTURE * abs(texture_departures[0][1])
-                        and abs(_peak_depth(texture, texture_departures[0][0], outward) - depth_i) <= ON_BOUNDARY_PX
-                        and _one_step(grey, depth_i, step_i, outward)):
-                    # the spread across the lines only peaks on the level's boundary, and the
-                    # pavement's level differs from the ground's far more than the surface
-                    # varies across the lines: a transverse line through the blurred boundary
-                    # samples ground and pavement side by side, the spread's half-level crossing
-                    # lies half a pixel outside, and the level places the boundary (monochrome
-                    # snow at 2 km, 2048 px: the spread 8 inside, 25 on the level's crossing, 3
-                    # on the ground; the level's crossing 0.1 px from the true threshold, the
-                    # spread's 0.6 px beyond it). Where a marking lies between the ground and
-                    # the level's departure (unresolved stripes brighter than the ground before a
-                    # darker pavement: the ray-cast airport at 3.1-3.3 km, 1024 px, the level's
-                    # departure 1.1-1.4 px inside the threshold; the spread peaks outside the
-                    # departure or the level rises before it falls) or the stripes make most of
-                    # the level's change (the same airport at 600 m), the spread's is kept
+                        and 0.0 <= (texture_departures[0][0] - depth_i) * outward <= ON_BOUNDARY_PX):
+                    # the spread across the lines peaks on the level's boundary, its departure
+                    # half a pixel outside the level's, and the pavement's level differs from
+                    # the ground's far more than the surface varies across the lines: a
+                    # transverse line through the blurred boundary samples ground and pavement
+                    # side by side, and the level places the boundary (monochrome snow at 2 km,
+                    # 2048 px: the spread 8 inside, 25 on the level's crossing, 3 on the ground;
+                    # the level's crossing 0.1 px from the true threshold, the spread's 0.6 px
+                    # beyond it). Where the spread departs farther out (unresolved stripes, a
+                    # band of the ground's level before a darker pavement: the ray-cast airport
+                    # at 3.1-3.4 km, 1024 px, the level's departure 1.2-1.5 px inside) or the
+                    # stripes make most of the level's change (the same airport at 600 m), the
+                    # spread's is kept
                     exits.pop(0)
                 exits.append((depth_i, step_i, significance_i, "ground-exit"))
                 break
@@ -578,32 +576,6 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
     return TransverseLine(line_h=line_h, corner_left_uv=meet_h(line_h, line_left),
                           corner_right_uv=meet_h(line_h, line_right), depth_px=depth,
                           step=step, significance=significance, method=method, spans=spans)
-
-
-def _peak_depth(profile: "_StepProfile", depth: float, outward: int, reach_px: float = 3.0) -> float:
-    """Depth of the lightly smoothed ``profile``'s highest sample from ``depth`` to ``reach_px``
-    inside the runway (the extreme a departure from the ground located at ``depth`` reaches)."""
-    inside = (depth - profile.depths) * outward
-    near = np.isfinite(profile.light) & (inside >= -0.5 * profile.step_d_px) & (inside <= reach_px)
-    if not near.any():
-        return math.nan
-    return float(profile.depths[near][np.argmax(profile.light[near])])
-
-
-def _one_step(profile: "_StepProfile", depth: float, step: float, outward: int) -> bool:
-    """Does the lightly smoothed level ``profile`` leave the ground for the departure at ``depth``
-    (of ``step`` grey levels) in one step, without first moving the other way (a marking of the
-    opposite contrast between the ground and the departure) by more than ``max(2, 0.15 |step|)``
-    grey levels over the ``SAME_DEPARTURE_PX`` outside it? The ground's level is the profile's
-    median over the ``SAME_DEPARTURE_PX`` beyond that."""
-    outside = (profile.depths - depth) * outward
-    finite = np.isfinite(profile.light)
-    near = finite & (outside >= 0.0) & (outside <= SAME_DEPARTURE_PX)
-    ground = finite & (outside > SAME_DEPARTURE_PX) & (outside <= 2.0 * SAME_DEPARTURE_PX)
-    if not (near.any() and ground.any()):
-        return False
-    against = (profile.light[near] - float(np.median(profile.light[ground]))) * -np.sign(step)
-    return bool(np.max(against) <= max(2.0, 0.15 * abs(step)))
 
 
 def pavement_beyond_edges(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
