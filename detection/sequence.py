@@ -17,12 +17,11 @@ dropped from an otherwise good detection (``max_threshold_jump_*``). The thresho
 followed as a track: at a steady ground speed the reciprocal of its width in pixels,
 ``1 / w = x / (f W)``, falls linearly with time whatever the height, so the widths of the last
 ``threshold_track_s`` seconds predict the next one (their mean where their scatter has ``1 / w``
-rising); a threshold off that prediction (a marking
-or a pavement joining the runway taken for it) has its corners withheld, and rejections in a
-row that agree with each other start the track afresh once there are at least three of them and
-as many as the widths the track still holds in its window (the track's old widths age out of it
-while the rejections come: a track that was the wrong object is replaced in about half the
-window). Flying toward the threshold its
+rising); a threshold off that prediction (a marking or a pavement joining the runway taken for
+it) has its corners withheld, and rejections in a row that agree with each other start the
+track afresh once there are at least three of them and as many as the widths the track still
+holds in its window (the track's old widths age out of it while the rejections come: a track
+that was the wrong object is replaced in about half the window). Flying toward the threshold its
 width only grows: where the track holds fewer than three widths, one narrower than the last
 threshold accepted in the last ``threshold_shrink_memory_s`` seconds (less the same tolerance) is
 withheld (below 100 ft, once the threshold had left the frame below, the touchdown zone's bars
