@@ -1227,7 +1227,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
                          f"edge{'s' if len(beyond) > 1 else ''} (a pavement crossing or joining the runway there)")
             near = None
     threshold_marked = near is not None and (marked or near.method.startswith("marking") or marked_at_start(
-        ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px, 1.0, min_step,
+        ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px, min_step,
         pavement_step=near.step if math.isfinite(near.step) else 0.0, params=params))
     if near is not None and far is not None and far.spans:
         # a runway is a long strip (params.min_length_to_width widths at least): an "end" found

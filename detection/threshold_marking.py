@@ -41,6 +41,7 @@ import numpy as np
 
 from visland.detection.horizon import HorizonFrame, depth_along, meet_h, widths_along
 from visland.detection.params import DetectorParams
+from visland.detection.pencil import row_mean
 from visland.detection.refine import PixelLine, chroma_of, percentile_of, remap_inside
 from visland.detection.transverse import TransverseLine, edge_crossings_s, transverse_grid, transverse_line_h
 
@@ -236,7 +237,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     sampled = ok[~np.isnan(ok)]
     bright = float(percentile_of(sampled, params.marking_bright_percentile)) if sampled.size else math.nan
     contrast = bright - surface
-    level = np.nanmean(values, axis=1)          # across the width, per line (values: NaN outside)
+    level = row_mean(values)                    # across the width, per line (values: NaN outside)
     doubtful = None
     if unresolved:
         # the stripes of a threshold at the pavement's start lie within its first 0.8 widths (plus
@@ -310,8 +311,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
 
 
 def marked_at_start(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine, d_threshold: float,
-                    d_far: float, min_step: float, pavement_step: float = 0.0,
-                    params: DetectorParams | None = None) -> bool:
+                    min_step: float, pavement_step: float = 0.0, params: DetectorParams | None = None) -> bool:
     """Whether the threshold found where the pavement begins, at depth ``d_threshold``, carries the
     threshold's own marking: white paint across the whole width within its first
     ``params.marked_start_widths`` runway widths, a runway's mark that a taxiway or a road does
@@ -344,8 +344,6 @@ def marked_at_start(image, horizon: HorizonFrame, s0: float, left: PixelLine, ri
         The runway's edges.
     d_threshold : float
         Depth (px below the horizon) of the threshold found at the pavement's start.
-    d_far : float
-        Depth of the far end of the edges' support: nothing farther is read.
     min_step, pavement_step : float
         Grey levels: the frame's least step, and the step from the ground to the pavement.
     params : DetectorParams, optional
@@ -358,7 +356,7 @@ def marked_at_start(image, horizon: HorizonFrame, s0: float, left: PixelLine, ri
     line_left, line_right, width_k, k_centre = across
     fx = horizon.camera.fx
     d_reach = depth_along(fx, d_threshold, params.marked_start_widths, width_k)
-    d_plain_far = max(depth_along(fx, d_threshold, PLAIN_REACH_WIDTHS, width_k), d_far, 1.0)
+    d_plain_far = max(depth_along(fx, d_threshold, PLAIN_REACH_WIDTHS, width_k), 1.0)
     start = d_threshold - params.marked_start_skip_px
     # the marking's lines (one at least), then the plain pavement's, a pixel of blur past the reach,
     # and the ground's before the threshold, past the blur
@@ -377,12 +375,12 @@ def marked_at_start(image, horizon: HorizonFrame, s0: float, left: PixelLine, ri
         return False
     values = remap_inside(image, grid[..., 0].astype(np.float32), grid[..., 1].astype(np.float32), inside,
                           cv2.BORDER_CONSTANT, np.nan)
-    line_levels = np.nanmean(values, axis=1)
+    line_levels = row_mean(values)
     # (its darkest line: touchdown-zone and aiming-point marks brighten many of them far out)
     plain = float(np.nanmin(line_levels[rows_ok & (group == 1)]))
     ground_ok = rows_ok & (group == 2)
     ground_step = float(np.nanmedian(line_levels[ground_ok])) - plain if ground_ok.any() else 0.0
-    quarters = np.stack([np.nanmean(q, axis=1) for q in np.array_split(values[rows_ok & (group == 0)], 4, axis=1)],
+    quarters = np.stack([row_mean(q) for q in np.array_split(values[rows_ok & (group == 0)], 4, axis=1)],
                         axis=1)                                              # (lines, 4)
     # (the step where the threshold was placed can be another than the ground's: a texture's end)
     excess = max(min_step, 0.5 * abs(pavement_step), 0.5 * abs(ground_step))
