@@ -15,7 +15,7 @@ Usage::
     nice .venv/bin/python benchmarks/detection_robustness.py --size 1024 \
         --out /work/data/NAME/robustness.csv --figure docs/detection_robustness.png
 
-Measured figures are in the README ("Detection robustness").
+Measured figures are in docs/robustness.md ("Single frames, searched from scratch").
 """
 from __future__ import annotations
 

@@ -30,7 +30,7 @@ Usage::
         --figure docs/detection_robustness_approach.png
 
 Run it at ``--size 2048`` as well (the product's frame size, about 17 min here): the 1024 px run
-showed 1 gross frame where the 2048 px one showed 454 (2026-11-28, README) -- a parallel taxiway
+showed 1 gross frame where the 2048 px one showed 454 (2026-11-28, docs/robustness.md) -- a parallel taxiway
 acquired where the runway is faint, thresholds on markings resolved only at that size.
 
 Writes the per-frame CSV (``--out``), the per-condition CSV (``--out`` with
@@ -177,7 +177,7 @@ def _fmt(value, digits=2) -> str:
 
 
 def markdown_table(results: dict) -> list[str]:
-    """Lines of the README table: one row per condition (frames above 100 ft, all bands)."""
+    """Lines of the table in docs/robustness.md: one row per condition (frames above 100 ft, all bands)."""
     lines = ["| condition | frames | found | gross | withheld | near corner med / p95 / max px | edge med / p95 px "
              "| \\|dpsi\\| med deg | worst band (found, near max) | dH 100 ft ccpi-hg-2p / ekf-2l m | pass |",
              "|---|---:|---:|---:|---:|---|---|---:|---|---|:-:|"]

@@ -24,7 +24,7 @@ Usage::
 the detector's own prediction, which ignores the translation, is weakest; beyond ``hold_s`` it
 drops its last detection and searches the whole frame, while the filter still predicts).
 
-Measured (README "Search windows placed by the filter"): 512 px dickmanns-wind at 5 Hz with
+Measured (docs/estimation.md, "Search windows placed by the filter"): 512 px dickmanns-wind at 5 Hz with
 ``--skip 10`` (2 s between frames): the filter's windows track 13 of 23 found frames (own: 0),
 detector median 207 vs 419 ms.
 """

@@ -39,7 +39,7 @@ information form (a Kalman filter without process noise; FilterPy's vocabulary: 
 pixel noise by finite differences, and a gate on the normalised innovation (a detector's stray
 corner does not move the calibration).
 
-What is observable (the README says it for users): roll comes from the threshold's direction
+What is observable (docs/estimation.md says it for users): roll comes from the threshold's direction
 (and the epipolar constraint); pitch minus slope from the vanishing point; pitch and yaw alone
 from the epipolar constraint, which needs parallax: it sharpens as the runway approaches
 (``T / range`` grows). Yaw is also absorbed by the runway heading (d_F), so it is estimated only

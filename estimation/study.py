@@ -507,8 +507,8 @@ def _calibration_study(spec: StudySpec, seed: int, echo) -> dict:
     return {"conditions": figures, "target_m": CALIBRATION_TARGET_M, "target_deg": CALIBRATION_TARGET_DEG}
 
 
-#: Why 5 % convergence times differ from the thesis's by more than 2x, measured (README, "5 %
-#: convergence time on simulated measurements"); printed under a study's table with each run's figures.
+#: Why 5 % convergence times differ from the thesis's by more than 2x, measured (docs/estimation.md,
+#: "5 % convergence time on simulated measurements"); printed under a study's table with each run's figures.
 #: "faster" for every study; the others by thesis table, for times slower than the thesis's or none.
 CONVERGENCE_REASONS = {
     "faster": "faster than the thesis's: tuning. The thesis tuned II, EKF and OJ by iteration and gives no "
