@@ -229,9 +229,11 @@ def test_the_runway_s_ground_geometry_tells_it_from_a_parallel_strip():
                                                   2.0, params)
 
 
-def _camera_turned_result(camera, states, i, pitch_offset_deg, fixed_to_camera):
+def _camera_turned_result(camera, states, i, pitch_offset_deg, fixed_to_camera, vp_below_px=0.0):
     """A found result at pitch + offset: the runway's exact edges (they move with the camera),
-    or the edges of the unturned view (an object fixed to the camera); the horizon always turns."""
+    or the edges of the unturned view (an object fixed to the camera); the horizon always turns.
+    With ``vp_below_px`` the edges are turned about their near corners so that they cross that
+    far below their true crossing (blurred edges)."""
     import math as _math
     from dataclasses import replace as _replace
 
@@ -247,6 +249,13 @@ def _camera_turned_result(camera, states, i, pitch_offset_deg, fixed_to_camera):
     corners = ideal_features(state if fixed_to_camera else turned, get_scenario("thesis-3").runway,
                              camera).corners_uv[0]
     segments = {"left": _np.array([corners[2], corners[0]]), "right": _np.array([corners[3], corners[1]])}
+    if vp_below_px:
+        from visland.camera import intersect_lines
+        crossing = _np.asarray(intersect_lines(*line_through_points(corners[0], corners[2]),
+                                               *line_through_points(corners[1], corners[3])), float)
+        biased = crossing + _np.array([0.0, vp_below_px])
+        for name, near in (("left", corners[0]), ("right", corners[1])):
+            segments[name] = _np.array([near + 0.5 * (biased - near), near])
     lines = {}
     for name, seg in segments.items():
         rho, theta = line_through_points(camera.pixels_to_normalized(seg[0]), camera.pixels_to_normalized(seg[1]))
@@ -274,6 +283,35 @@ def test_a_runway_that_does_not_move_with_the_scene_is_refused(monkeypatch, fixe
     sequence = sequence_module.DetectionSequence(camera)
     outcomes = [sequence(None, 0.0, 0.0, 0.5 * k) for k in range(4)]
     if fixed_to_camera:
+        assert outcomes[0].found and not any(r.found for r in outcomes[1:])
+        assert "fixed to the camera" in outcomes[1].reason
+    else:
+        assert all(r.found for r in outcomes), [r.reason for r in outcomes]
+
+
+@pytest.mark.parametrize("turning, fixed_to_camera, refused", [(False, False, False), (True, False, False),
+                                                               (True, True, True)])
+def test_a_vanishing_point_off_the_horizon_is_not_taken_for_motion(monkeypatch, turning, fixed_to_camera,
+                                                                    refused):
+    """Edges crossing 6 px below the horizon (blurred edges; 'sensor: noise, blur, JPEG' at 2048
+    px put it 10 px below at 600 m): with the camera held still nothing moved and the runway is
+    kept (it was refused as fixed to the camera, the offset taken for the horizon's motion);
+    turning with the camera, it is kept; fixed to the camera while the camera turns, refused."""
+    from visland.camera import CameraModel
+    from visland.detection import sequence as sequence_module
+    from visland.flight import simulate_flight
+    from visland.scenarios import get_scenario
+    camera = CameraModel.from_fov(640, 360, 60.0, (0.0, -4.0, 0.0))
+    assert 6.0 > sequence_module.DetectionSequence(camera).params.static_min_horizon_motion_px
+    states = simulate_flight(get_scenario("thesis-3"))
+    i = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 600.0)))
+    step_deg = 0.5 if turning else 0.0
+    results = iter([_camera_turned_result(camera, states, i, step_deg * k, fixed_to_camera, vp_below_px=6.0)
+                    for k in range(4)])
+    monkeypatch.setattr(sequence_module, "detect_runway", lambda *args, **kwargs: next(results))
+    sequence = sequence_module.DetectionSequence(camera)
+    outcomes = [sequence(None, 0.0, 0.0, 0.5 * k) for k in range(4)]
+    if refused:
         assert outcomes[0].found and not any(r.found for r in outcomes[1:])
         assert "fixed to the camera" in outcomes[1].reason
     else:
