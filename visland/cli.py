@@ -33,7 +33,7 @@ def _cmd_scenarios(args) -> int:
     for scenario in BUILTIN_SCENARIOS.values():
         print(f"{scenario.name:15s} {scenario.dx_m:7.0f} {scenario.dy_m:6.0f} {scenario.dgs_m:6.0f} "
               f"{scenario.dpsi_deg:5.0f} {scenario.gamma_deg:5.0f}  {scenario.description}")
-    print("\nAlso: any TOML scenario file (see README, 'Scenario files').")
+    print("\nAlso: any TOML scenario file (README, Commands, 'Scenarios and simulation': the fields).")
     return 0
 
 
