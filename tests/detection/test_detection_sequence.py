@@ -267,26 +267,38 @@ def _camera_turned_result(camera, states, i, pitch_offset_deg, fixed_to_camera, 
                            pitch_rad=float(turned.pitch_rad[0]), mode="tracking")
 
 
-@pytest.mark.parametrize("fixed_to_camera", [False, True])
-def test_a_runway_that_does_not_move_with_the_scene_is_refused(monkeypatch, fixed_to_camera):
-    """The camera pitches up 0.5 deg per frame: the runway's edges move with the horizon, the
-    windshield frame's do not (issue 18: plausibility before confidence)."""
+def _turning_sequence_outcomes(monkeypatch, distance_m, step_deg, fixed_to_camera, vp_below_px=0.0):
+    """Four frames 0.5 s apart of a 640x360 camera pitching up ``step_deg`` per frame, each
+    "detected" as :func:`_camera_turned_result` makes it, through a :class:`DetectionSequence`."""
     from visland.camera import CameraModel
     from visland.detection import sequence as sequence_module
     from visland.flight import simulate_flight
     from visland.scenarios import get_scenario
     camera = CameraModel.from_fov(640, 360, 60.0, (0.0, -4.0, 0.0))
     states = simulate_flight(get_scenario("thesis-3"))
-    i = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 2000.0)))
-    results = iter([_camera_turned_result(camera, states, i, 0.5 * k, fixed_to_camera) for k in range(4)])
+    i = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - distance_m)))
+    results = iter([_camera_turned_result(camera, states, i, step_deg * k, fixed_to_camera, vp_below_px)
+                    for k in range(4)])
     monkeypatch.setattr(sequence_module, "detect_runway", lambda *args, **kwargs: next(results))
     sequence = sequence_module.DetectionSequence(camera)
-    outcomes = [sequence(None, 0.0, 0.0, 0.5 * k) for k in range(4)]
-    if fixed_to_camera:
+    assert vp_below_px == 0.0 or vp_below_px > sequence.params.static_min_horizon_motion_px
+    return [sequence(None, 0.0, 0.0, 0.5 * k) for k in range(4)]
+
+
+def _assert_refused_from_the_second(outcomes, refused: bool):
+    if refused:
         assert outcomes[0].found and not any(r.found for r in outcomes[1:])
         assert "fixed to the camera" in outcomes[1].reason
     else:
         assert all(r.found for r in outcomes), [r.reason for r in outcomes]
+
+
+@pytest.mark.parametrize("fixed_to_camera", [False, True])
+def test_a_runway_that_does_not_move_with_the_scene_is_refused(monkeypatch, fixed_to_camera):
+    """The camera pitches up 0.5 deg per frame: the runway's edges move with the horizon, the
+    windshield frame's do not (issue 18: plausibility before confidence)."""
+    outcomes = _turning_sequence_outcomes(monkeypatch, 2000.0, 0.5, fixed_to_camera)
+    _assert_refused_from_the_second(outcomes, fixed_to_camera)
 
 
 @pytest.mark.parametrize("turning, fixed_to_camera, refused", [(False, False, False), (True, False, False),
@@ -297,25 +309,9 @@ def test_a_vanishing_point_off_the_horizon_is_not_taken_for_motion(monkeypatch, 
     px put it 10 px below at 600 m): with the camera held still nothing moved and the runway is
     kept (it was refused as fixed to the camera, the offset taken for the horizon's motion);
     turning with the camera, it is kept; fixed to the camera while the camera turns, refused."""
-    from visland.camera import CameraModel
-    from visland.detection import sequence as sequence_module
-    from visland.flight import simulate_flight
-    from visland.scenarios import get_scenario
-    camera = CameraModel.from_fov(640, 360, 60.0, (0.0, -4.0, 0.0))
-    assert 6.0 > sequence_module.DetectionSequence(camera).params.static_min_horizon_motion_px
-    states = simulate_flight(get_scenario("thesis-3"))
-    i = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 600.0)))
-    step_deg = 0.5 if turning else 0.0
-    results = iter([_camera_turned_result(camera, states, i, step_deg * k, fixed_to_camera, vp_below_px=6.0)
-                    for k in range(4)])
-    monkeypatch.setattr(sequence_module, "detect_runway", lambda *args, **kwargs: next(results))
-    sequence = sequence_module.DetectionSequence(camera)
-    outcomes = [sequence(None, 0.0, 0.0, 0.5 * k) for k in range(4)]
-    if refused:
-        assert outcomes[0].found and not any(r.found for r in outcomes[1:])
-        assert "fixed to the camera" in outcomes[1].reason
-    else:
-        assert all(r.found for r in outcomes), [r.reason for r in outcomes]
+    outcomes = _turning_sequence_outcomes(monkeypatch, 600.0, 0.5 if turning else 0.0, fixed_to_camera,
+                                          vp_below_px=6.0)
+    _assert_refused_from_the_second(outcomes, refused)
 
 
 @pytest.mark.parametrize("beside_m", [0.0, 110.0])
