@@ -171,7 +171,7 @@ class DetectionSequence:
         if prior is not None and not self.confirmed and inertial:
             result, prior = self._look_for_confirmed(result, prior, image, roll_rad, pitch_rad, dt, float(t_s))
         if result.found:
-            result = self._check_moves_with_scene(result, float(t_s))
+            result = self._check_moves_with_scene(result, float(t_s), inertial)
         if result.found and prior is None and self.identity is not None:
             result = self._check_identity(result, image, roll_rad, pitch_rad, float(t_s))
         if result.found and prior is not None and inertial:
@@ -241,10 +241,18 @@ class DetectionSequence:
             self.replacement = (t_s, geometry[0])
         return result, prior
 
-    def _check_moves_with_scene(self, result: DetectionResult, t_s: float) -> DetectionResult:
+    def _check_moves_with_scene(self, result: DetectionResult, t_s: float, inertial: bool = True) -> DetectionResult:
         """Refuse a "runway" that stays put in the image while the horizon moves (:class:`DetectorParams`
-        ``static_*``): part of the aircraft, not of the scene."""
+        ``static_*``): part of the aircraft, not of the scene. A horizon read off the frames
+        (``inertial`` False) is uncertain by ``IMAGE_HORIZON_SIGMA_DEG`` in each: its motion
+        counts only beyond three standard deviations of the difference of two readings (on the
+        ray-cast cockpit footage, 640x360, the runway was refused for 2 px of motion, 0.2 deg,
+        noise against the 1.7 px minimum)."""
         p = self.params
+        min_motion_px = p.static_min_horizon_motion_px
+        if not inertial:
+            min_motion_px = max(min_motion_px, 3.0 * math.sqrt(2.0) * self.camera.fy
+                                * math.radians(IMAGE_HORIZON_SIGMA_DEG))
         self.recent = [(t, r) for t, r in self.recent if 0.0 < t_s - t <= p.static_window_s]
         if self.recent:
             _, old = self.recent[0]
@@ -262,7 +270,7 @@ class DetectionSequence:
                 horizon_motion, edge_motion = 0.0, math.inf
             else:
                 edge_motion = float(np.linalg.norm(vp_now - vp_then))
-            if (horizon_motion > p.static_min_horizon_motion_px
+            if (horizon_motion > min_motion_px
                     and edge_motion < p.static_max_motion_ratio * horizon_motion):
                 self.recent.append((t_s, result))
                 return _refused(result, f"the edges' crossing stayed within {edge_motion:.1f} px in the image while "
