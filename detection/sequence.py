@@ -241,7 +241,7 @@ class DetectionSequence:
             self.replacement = (t_s, geometry[0])
         return result, prior
 
-    def _check_moves_with_scene(self, result: DetectionResult, t_s: float, inertial: bool = True) -> DetectionResult:
+    def _check_moves_with_scene(self, result: DetectionResult, t_s: float, inertial: bool) -> DetectionResult:
         """Refuse a "runway" that stays put in the image while the horizon moves (:class:`DetectorParams`
         ``static_*``): part of the aircraft, not of the scene. A horizon read off the frames
         (``inertial`` False) is uncertain by ``IMAGE_HORIZON_SIGMA_DEG`` in each: its motion
@@ -251,8 +251,7 @@ class DetectionSequence:
         p = self.params
         min_motion_px = p.static_min_horizon_motion_px
         if not inertial:
-            min_motion_px = max(min_motion_px, 3.0 * math.sqrt(2.0) * self.camera.fy
-                                * math.radians(IMAGE_HORIZON_SIGMA_DEG))
+            min_motion_px = max(min_motion_px, 3.0 * math.sqrt(2.0) * self._image_horizon_sigma_px())
         self.recent = [(t, r) for t, r in self.recent if 0.0 < t_s - t <= p.static_window_s]
         if self.recent:
             _, old = self.recent[0]
@@ -266,7 +265,7 @@ class DetectionSequence:
             # held still, refusing the runway
             vp_then, vp_now = _edges_crossing(old, self.camera), _edges_crossing(result, self.camera)
             horizon_motion = _horizon_motion_at(self.camera, old.horizon, result.horizon, vp_then)
-            if vp_then is None or vp_now is None or not math.isfinite(horizon_motion):
+            if vp_now is None or not math.isfinite(horizon_motion):          # (NaN without vp_then)
                 horizon_motion, edge_motion = 0.0, math.inf
             else:
                 edge_motion = float(np.linalg.norm(vp_now - vp_then))
@@ -345,6 +344,10 @@ class DetectionSequence:
         prior_sq = self.params.identity_k_rate ** 2
         return float(rate) * prior_sq / (prior_sq + standard_error_sq)
 
+    def _image_horizon_sigma_px(self) -> float:
+        """The uncertainty of a horizon read off a frame (``IMAGE_HORIZON_SIGMA_DEG``), pixels."""
+        return self.camera.fy * math.radians(IMAGE_HORIZON_SIGMA_DEG)
+
     def _detect_without_attitude(self, image, prior: DetectionResult | None) -> DetectionResult:
         """The horizon from the frame, moved through the runway's vanishing point when found.
 
@@ -361,9 +364,9 @@ class DetectionSequence:
         if attitude.method == "sky":
             # the visible horizon is up to a few tenths of a degree below the true one (haze):
             # until the runway's vanishing point has placed it, edges meet it that loosely
-            f = self.camera.fy
-            params = replace(params, horizon_sigma_px=max(params.horizon_sigma_px, f * math.radians(IMAGE_HORIZON_SIGMA_DEG)),
-                             vp_tolerance_px=max(params.vp_tolerance_px, f * math.radians(2 * IMAGE_HORIZON_SIGMA_DEG)))
+            sigma_px = self._image_horizon_sigma_px()
+            params = replace(params, horizon_sigma_px=max(params.horizon_sigma_px, sigma_px),
+                             vp_tolerance_px=max(params.vp_tolerance_px, 2.0 * sigma_px))
         result = detect_in_scene_frame(scene, self.camera, attitude.roll_rad, attitude.pitch_rad, params, prior)
         vp = _edges_crossing(result, self.camera)
         if vp is None:
@@ -613,12 +616,11 @@ def _horizon_motion_at(camera: CameraModel, horizon_then, horizon_now, uv) -> fl
     ``uv`` is missing."""
     if uv is None or not all(math.isfinite(x) for x in (*horizon_then, *horizon_now)):
         return math.nan
-    normal_then = camera.line_to_pixel_hough(*horizon_then)[1]
-    normal_now = camera.line_to_pixel_hough(*horizon_now)[1]
-    same_side = math.cos(normal_now - normal_then) >= 0.0
-    d_then = float(camera.line_distance_px(*horizon_then, uv))
-    d_now = float(camera.line_distance_px(*horizon_now, uv))
-    return abs((d_now if same_side else -d_now) - d_then)
+    (r_then, t_then), (r_now, t_now) = (camera.line_to_pixel_hough(*h) for h in (horizon_then, horizon_now))
+    d_then = uv[0] * math.cos(t_then) + uv[1] * math.sin(t_then) - r_then
+    d_now = uv[0] * math.cos(t_now) + uv[1] * math.sin(t_now) - r_now
+    same_side = math.cos(t_now - t_then) >= 0.0
+    return float(abs((d_now if same_side else -d_now) - d_then))
 
 
 def _edges_crossing(result: DetectionResult, camera: CameraModel):
