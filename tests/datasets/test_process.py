@@ -98,9 +98,10 @@ def test_rendered_approach_measured_and_estimated_against_labels_and_truth(gener
         assert set(m["source"]) == ({"anchored", "tracking"} if source == "anchored" else {source})
         assert run["throughput"]["fps_analysis_only"] > 0
 
-    # detection: found in every frame; corners, edges and heading against the labels
+    # detection: found in every frame but the first (a new track is reported from its second
+    # frame, new_track_frames); corners, edges and heading against the labels
     m = measured["detection"]
-    assert m["found"].all()
+    assert m["found"][1:].all() and not m["found"][0] and "frame 1 of a new track" in m["reason"][0]
     near = _near_corner_error_px(m, labels)
     assert np.isfinite(near).sum() >= 70                        # measured 79 of 100 (others withheld)
     assert np.nanmedian(near) < 0.25                             # measured 0.19 px
@@ -112,10 +113,10 @@ def test_rendered_approach_measured_and_estimated_against_labels_and_truth(gener
     far = np.maximum(errors["far_left"], errors["far_right"])
     assert np.nanmedian(far) < 0.6 and np.nanmax(far) < 2.5     # measured 0.46 / 2.17 px
     for side, edge in edge_errors_px(m, labels, camera).items():
-        assert np.isfinite(edge).sum() >= 103                    # measured 103 of 104
+        assert np.isfinite(edge).sum() >= 102                    # measured 102 of 104 (not the first)
         # measured p95 0.155 / 0.237, max 0.263 / 0.531 px (left / right)
         assert np.nanpercentile(edge, 95) < 0.3 and np.nanmax(edge) < 0.7
-    dpsi = np.abs(m["dpsi_deg"] - labels["dpsi_deg"])
+    dpsi = np.abs(m["dpsi_deg"] - labels["dpsi_deg"])[1:]
     assert np.median(dpsi) < 0.01 and dpsi.max() < 0.12          # measured 0.006 / 0.097 deg
 
     # tracking (built for 25 Hz, here 5 Hz): drifts, holds the corners to 500 m; every frame without

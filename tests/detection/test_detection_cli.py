@@ -45,13 +45,15 @@ def test_detect_writes_measurements_with_reasons(folder, tmp_path, capsys):
     table = read_measurements(out)
     assert table.n_rows == 5
     assert list(table["frame"]) == [0, 1, 2, 3, 4]
-    assert table["found"][:3].tolist() == [1.0, 1.0, 1.0]
+    # the first frame of the track is followed, reported from the second (new_track_frames)
+    assert table["found"][:3].tolist() == [0.0, 1.0, 1.0]
+    assert "not reported: frame 1 of a new track" in table["reason"][0]
     assert set(table["source"]) == {"detection"}
     assert table["found"][3] == 0 and "unreadable" in table["reason"][3]
     assert table["found"][4] == 0 and "256x256" in table["reason"][4]
     assert np.isnan(table["near_left_u_px"][3:]).all()
     printed = capsys.readouterr().out
-    assert "runway found in 3" in printed and str(out) in printed
+    assert "runway found in 2" in printed and str(out) in printed
     # refused to overwrite without --force, then replaced with it
     assert main(["detect", str(folder), "--out", str(out), "--quiet"]) == 2
     assert main(["detect", str(folder), "--out", str(out), "--quiet", "--force"]) == 0

@@ -55,9 +55,9 @@ def test_tracking_after_a_miss_does_not_jump_to_the_parallel_taxiway():
     from -0.38 to +0.77, half the width) and the study tracked it to the threshold. The second
     frame must be refused (found = 0 with the reason) or be the runway (edges within 1 px): never
     the taxiway reported found."""
-    from visland.detection import DetectionSequence
+    from visland.detection import DetectionSequence, DetectorParams
     frames, camera = _study_frames({"surface": "concrete", "surroundings": "dry"}, (3000.0, 45.0), [54, 57])
-    sequence = DetectionSequence(camera)
+    sequence = DetectionSequence(camera, DetectorParams(new_track_frames=1))     # the first frame reported
     (rgb, state, labels, t_s), (rgb2, state2, labels2, t2_s) = frames
     first = sequence(rgb, float(state.roll_rad[0]), float(state.pitch_rad[0]), t_s)
     errors = _errors(first, camera, state, labels)

@@ -12,7 +12,7 @@ import pytest
 
 from tests.helpers.detection_frames import frame
 from visland.camera import CameraModel
-from visland.detection import DetectionSequence
+from visland.detection import DetectionSequence, DetectorParams
 from visland.detection.predicted import prior_from_prediction
 
 
@@ -50,7 +50,10 @@ def test_a_predicted_window_tracks_the_first_frame(distance_m):
     roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
     near, far = _prediction_from_labels(camera, labels)
     prior = prior_from_prediction(camera, near, far, roll, pitch, float(state.dpsi_rad[0]))
-    alone = DetectionSequence(camera)(image, roll, pitch, 0.0)
+    # alone, the first frame of a track is followed, reported from the second (new_track_frames);
+    # found where the prediction put it, at once
+    assert not DetectionSequence(camera)(image, roll, pitch, 0.0).found
+    alone = DetectionSequence(camera, DetectorParams(new_track_frames=1))(image, roll, pitch, 0.0)
     guided = DetectionSequence(camera)(image, roll, pitch, 0.0, predicted=prior)
     assert alone.found and alone.mode == "acquisition"
     assert guided.found and guided.mode == "tracking"          # searched in the predicted window
@@ -64,6 +67,7 @@ def test_a_wrong_prediction_costs_the_window_not_the_runway():
     roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
     near, far = _prediction_from_labels(camera, labels, shift_px=-160.0)   # a third of the frame off
     prior = prior_from_prediction(camera, near, far, roll, pitch, float(state.dpsi_rad[0]))
-    result = DetectionSequence(camera)(image, roll, pitch, 0.0, predicted=prior)
-    assert result.found
+    # (found by the search that follows, the first frame of a new track: reported at once here)
+    result = DetectionSequence(camera, DetectorParams(new_track_frames=1))(image, roll, pitch, 0.0, predicted=prior)
+    assert result.found and result.mode != "tracking"
     assert np.abs(result.corners_uv[:2] - labels.corners_uv[0, :2]).max() < 2.0

@@ -138,7 +138,7 @@ def test_the_pavement_start_is_withheld_once_a_marking_was_seen_twice_inside_the
                    _found(21.5, "chroma")])                           # the sightings are old: kept
     monkeypatch.setattr(seq_module, "detect_runway", lambda *a, **k: next(frames))
     camera = CameraModel.default(1024)
-    params = replace(DetectorParams(), marking_memory_s=1.0)
+    params = replace(DetectorParams(), marking_memory_s=1.0, new_track_frames=1)     # the first frame reported
     sequence = DetectionSequence(camera, params)
     times = [-0.6, -0.4, -0.2, 0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 2.5, 2.7]
     kept = [bool(sequence(np.zeros((8, 8), np.uint8), 0.0, 0.0, t).corners_found[:2].all()) for t in times]
@@ -161,7 +161,7 @@ def test_a_single_sighting_withholds_the_pavement_start_while_no_threshold_is_fo
                    _found(20.2, "marking-bar", marking_widths=7.6),
                    _found(20.3, "chroma")])                           # sightings agree: withheld
     monkeypatch.setattr(seq_module, "detect_runway", lambda *a, **k: next(frames))
-    sequence = DetectionSequence(CameraModel.default(1024), DetectorParams())
+    sequence = DetectionSequence(CameraModel.default(1024), DetectorParams(new_track_frames=1))
     results = [sequence(np.zeros((8, 8), np.uint8), 0.0, 0.0, t) for t in (0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2)]
     kept = [bool(r.corners_found[:2].all()) for r in results]
     assert kept == [False, False, True, True, True, True, False]
@@ -178,6 +178,6 @@ def test_with_a_threshold_followed_one_sighting_leaves_the_pavement_start(monkey
                    _found(20.3, "", marking_widths=2.5),
                    _found(20.4, "chroma")])
     monkeypatch.setattr(seq_module, "detect_runway", lambda *a, **k: next(frames))
-    sequence = DetectionSequence(CameraModel.default(1024), DetectorParams())
+    sequence = DetectionSequence(CameraModel.default(1024), DetectorParams(new_track_frames=1))
     results = [sequence(np.zeros((8, 8), np.uint8), 0.0, 0.0, t) for t in (0.0, 0.2, 0.4, 0.6, 0.8)]
     assert [bool(r.corners_found[:2].all()) for r in results] == [True, True, True, False, True]
