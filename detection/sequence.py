@@ -97,11 +97,16 @@ __all__ = ["DetectionSequence"]
 IMAGE_HORIZON_SIGMA_DEG = 0.15
 
 
-def _refused(result: DetectionResult, why: str) -> DetectionResult:
-    """``result`` refused by a sequence check: not found, saying ``"refused: " + why``, with the
-    frame's attitude, mode, size and time kept."""
-    return not_found(f"refused: {why}", roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
+def _not_found_as(result: DetectionResult, reason: str) -> DetectionResult:
+    """``result`` turned into a row not found, saying ``reason``, with the frame's attitude, mode,
+    size and time kept."""
+    return not_found(reason, roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
                      image_size=result.image_size, elapsed_s=result.elapsed_s)
+
+
+def _refused(result: DetectionResult, why: str) -> DetectionResult:
+    """``result`` refused by a sequence check: not found, saying ``"refused: " + why``."""
+    return _not_found_as(result, f"refused: {why}")
 
 
 class DetectionSequence:
@@ -182,7 +187,7 @@ class DetectionSequence:
                                    mode=result.mode, image_size=result.image_size, elapsed_s=result.elapsed_s)
         # a new track that matches a strip seen before, not a single frame's: found where the
         # prediction put it (an estimator's, which follows the runway), ...
-        seen_before = predicted is not None and window is predicted and result.found and result.mode == "tracking"
+        seen_before = window is not None and window is predicted and result.found and result.mode == "tracking"
         if prior is not None and not self.confirmed and inertial:
             result, prior = self._look_for_confirmed(result, prior, image, roll_rad, pitch_rad, dt, float(t_s))
             seen_before = seen_before or prior is None          # ... replacing the track, found the frame before too
@@ -222,16 +227,13 @@ class DetectionSequence:
         if result.found and not self.confirmed:
             # followed (the next frame's prior) but not reported: a taxiway beside a runway
             # lost in fog passes every other test
-            return not_found(f"not reported: {_unconfirmed_reason(result, self.camera, self.params)}",
-                             roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
-                             image_size=result.image_size, elapsed_s=result.elapsed_s)
+            return _not_found_as(result, f"not reported: {_unconfirmed_reason(result, self.camera, self.params)}")
         if result.found and self.track_frames < self.params.new_track_frames:
             # followed but not reported yet: a strip found in one frame can be a road or a taxiway
             # (module docstring)
-            return not_found(f"not reported: frame {self.track_frames} of a new track, reported from its frame "
-                             f"{self.params.new_track_frames} (a strip found in one frame only can be a road or a "
-                             "taxiway)", roll_rad=result.roll_rad, pitch_rad=result.pitch_rad, mode=result.mode,
-                             image_size=result.image_size, elapsed_s=result.elapsed_s)
+            return _not_found_as(result, f"not reported: frame {self.track_frames} of a new track, reported from "
+                                         f"its frame {self.params.new_track_frames} (a strip found in one frame only "
+                                         "can be a road or a taxiway)")
         return result
 
     def _look_for_confirmed(self, result: DetectionResult, prior: DetectionResult, image, roll_rad: float,
