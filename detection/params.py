@@ -84,7 +84,7 @@ NOT_SCALED_PX = (
     "faint_texture_max_width_px", "crossing_pavement_depth_px", "crossing_pavement_min_width_px",
     # calibrated sub-pixel corrections of an area-sampled boundary (refine)
     "boundary_flank_bias_px", "boundary_stripe_shift_px", "boundary_stripe_resolved_px",
-    "boundary_stripe_shift_scale_px",
+    "boundary_stripe_shift_scale_px", "hidden_stripe_min_px",
     # candidate lines' sub-pixel profile lengths and floors (candidates)
     "check_min_span_px", "check_transition_halfspan_px", "check_transition_side_px", "check_line_min_sigma_px",
     # the blur of the ground's step into the pavement, read past (threshold_marking.marked_at_start)
@@ -421,6 +421,18 @@ class DetectorParams(ParamsFile):
         ``shift * exp(-(max(separation - resolved, 0) / scale) ** 1.5)`` pixels, ``separation``
         between the stripe's two flanks (calibrated on area-sampled stripes 0 to 3 px wide at
         every sub-pixel phase: mean residual within 0.12 px); removed.
+    hidden_stripe_min_fraction : float
+        A border stripe's width is trusted along a boundary where this fraction of the profiles
+        used see both its flanks; a profile whose only step is on the stripe's inner line is then
+        moved out by that width (:func:`refine.past_hidden_stripe`: the ground as bright as the
+        paint hides the stripe's outer flank).
+    hidden_stripe_min_px : float
+        ... where the stripe is at least this wide (pixels of the frame: below, it is not resolved).
+    hidden_stripe_tolerance : float
+        ... and the lone step lies within this fraction of the width from the inner line.
+    hidden_stripe_max_scatter : float
+        ... and the stripes seen agree on a straight width within this fraction of it (robust
+        scatter): texture beyond the edge does not.
     net_step_outside_px, net_step_inside_px : tuple of 2 float
         A boundary's net grey-level change: mean between the first's distances outside it minus
         the mean between the second's distances inside the border stripe's reach (pixels).
@@ -935,6 +947,10 @@ class DetectorParams(ParamsFile):
     boundary_stripe_shift_px: float = 0.2
     boundary_stripe_resolved_px: float = 1.6
     boundary_stripe_shift_scale_px: float = 0.2
+    hidden_stripe_min_fraction: float = 0.08
+    hidden_stripe_min_px: float = 2.0
+    hidden_stripe_tolerance: float = 0.35
+    hidden_stripe_max_scatter: float = 0.25
     net_step_outside_px: tuple = (1.0, 3.0)
     net_step_inside_px: tuple = (0.5, 3.0)
     min_edge_support: float = 0.45
@@ -1132,7 +1148,9 @@ class DetectorParams(ParamsFile):
         "boundary_flank_ratio": (0.0, 10.0),
         "boundary_same_step_ratio": (0.0, 10.0), "boundary_flank_bias_px": (-10.0, 10.0),
         "boundary_stripe_shift_px": (0.0, 10.0), "boundary_stripe_resolved_px": (0.0, 100.0),
-        "boundary_stripe_shift_scale_px": (0.01, 100.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
+        "boundary_stripe_shift_scale_px": (0.01, 100.0), "hidden_stripe_min_fraction": (0.0, 1.0),
+        "hidden_stripe_min_px": (0.0, 100.0), "hidden_stripe_tolerance": (0.0, 1.0),
+        "hidden_stripe_max_scatter": (0.0, 10.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
         "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
         "block_sample_rows": (1, 4096, "int"), "block_grid_px": (2, 64, "int"),
         "block_grid_min_ratio": (1.0, 100.0), "deblock_min_grid_step": (0.0, 255.0), "deblock_sigma_px": (0.0, 10.0),

@@ -16,13 +16,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 
 from visland.detection.params import DetectorParams
 
-__all__ = ["PixelLine", "LineFit", "NoFit", "SLOPE_PER_STEP", "median_of", "percentile_of", "sample_profiles", "edge_offsets", "boundary_offsets", "transition_offsets",
+__all__ = ["PixelLine", "LineFit", "NoFit", "SLOPE_PER_STEP", "median_of", "percentile_of", "sample_profiles",
+           "edge_offsets", "boundary_offsets", "BoundaryPoints", "HiddenStripe", "past_hidden_stripe", "transition_offsets",
            "stripe_offsets", "fit_line", "refine_line", "chroma_boundary", "chroma_of",
            "remap_inside", "net_step"]
 
@@ -40,6 +42,9 @@ KERNEL_ROOM_PX = 3.0
 MAD_TO_SIGMA = 1.4826
 #: Tukey biweight cut-off, in robust sigmas (95 % efficiency under Gaussian noise).
 TUKEY_C = 4.685
+#: Fewest profiles seeing both flanks of a border stripe before its width is trusted
+#: (:func:`past_hidden_stripe`).
+HIDDEN_STRIPE_MIN_PROFILES = 6
 
 
 @dataclass(frozen=True)
@@ -448,7 +453,7 @@ def transition_offsets(profiles: np.ndarray, offsets: np.ndarray, window: np.nda
 def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, window: np.ndarray,
                      stripe_reach_px, flank_ratio: float | None = None, centroid_halfwidth_px: float = 0.5,
                      stripe_shift=None, outer_flank: bool = True, flank_bias_px: float | None = None,
-                     params: DetectorParams | None = None) -> tuple[np.ndarray, np.ndarray]:
+                     params: DetectorParams | None = None) -> "BoundaryPoints":
     """Sub-pixel position of a region's boundary in each profile, painted border stripe or not.
 
     Walking outwards (``outward`` = +1: along +offsets), a plain boundary is one step; a
@@ -501,10 +506,12 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
 
     Returns
     -------
-    position : ndarray, shape (n,)
-        Offset of the boundary, pixels (NaN where none).
-    strength : ndarray, shape (n,)
-        The chosen flank's grey-level slope (grey levels per pixel).
+    BoundaryPoints
+        ``position`` (offset of the boundary, pixels, NaN where none), ``strength`` (the chosen
+        flank's grey-level slope, grey levels per pixel) and ``stripe_inner`` (where the boundary
+        was placed on a border stripe's outer flank, the offset of its inner flank located the
+        same way, as if it were the boundary; NaN elsewhere): :func:`past_hidden_stripe` uses it
+        where the stripe's outer flank is not seen.
     """
     params = params or DetectorParams()
     flank_ratio = params.boundary_flank_ratio if flank_ratio is None else flank_ratio
@@ -563,6 +570,8 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
 
     position, total = centroid(chosen, lobe_sign)
     inner, _ = centroid(p1, sign1)
+    striped = has_outer & ~has_same
+    stripe_inner = np.where(striped, inner, np.nan)
     if outer_flank:
         # the lobe's outer flank, extrapolated: where it falls to 60 % and 20 % of the peak, the
         # edge lies at 2 x60 - x20 (for the lobe of an area-sampled step seen through bilinear
@@ -572,6 +581,11 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
         flank = _outer_crossings(g0 * lobe_sign[:, None], chosen, out_dir, offsets, (0.6, 0.2))
         extrapolated = 2.0 * flank[0] - flank[1] - flank_bias_px * out_dir
         position = np.where(np.isfinite(extrapolated), extrapolated, position)
+        if striped.any():
+            # the stripe's inner flank placed the way a lone step is (its own lobe's outer flank)
+            rows_s = np.nonzero(striped)[0]
+            flank_s = _outer_crossings(g0[rows_s] * sign1[rows_s, None], p1[rows_s], out_dir, offsets, (0.6, 0.2))
+            stripe_inner[rows_s] = 2.0 * flank_s[0] - flank_s[1] - flank_bias_px * out_dir
     # a stripe narrower than about two pixels is not resolved: area sampling spreads each of its
     # flanks over a pixel, which puts the outer flank's centroid about half a pixel outside the
     # boundary; the flanks' separation tells (under 1.6 px for stripes up to 1.5 px wide, 2 px
@@ -583,7 +597,149 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
     shift = amplitude * np.exp(-(np.maximum(separation - start, 0.0) / scale) ** 1.5)
     position = position - np.where(has_outer, shift * out_dir, 0.0)
     valid = np.isfinite(best) & (best > 0) & (total > 0) & (chosen >= half) & (chosen < m - half)
-    return np.where(valid, position, np.nan), np.where(valid, strength, 0.0)
+    return BoundaryPoints(np.where(valid, position, np.nan), np.where(valid, strength, 0.0),
+                          np.where(valid, stripe_inner, np.nan))
+
+
+class BoundaryPoints(NamedTuple):
+    """A region's boundary located in each profile (:func:`boundary_offsets`): offsets along the
+    profiles' normal, pixels, NaN where none."""
+
+    position: np.ndarray
+    strength: np.ndarray
+    stripe_inner: np.ndarray
+
+
+class HiddenStripe(NamedTuple):
+    """A border stripe's inner line ``inner0 + inner1 t`` and width ``width0 + width1 t`` (offsets
+    along a line's normal, pixels, at positions t along it), seen between ``t_lo`` and ``t_hi``."""
+
+    inner0: float
+    inner1: float
+    width0: float
+    width1: float
+    t_lo: float
+    t_hi: float
+
+    def restated(self, old: "PixelLine", new: "PixelLine") -> "HiddenStripe":
+        """The same stripe in the coordinates of line ``new`` (it was in those of ``old``)."""
+        t = np.array([self.t_lo, self.t_hi])
+        if not t[1] > t[0]:
+            return self
+        inner = old.point + t[:, None] * old.direction + (self.inner0 + self.inner1 * t)[:, None] * old.normal
+        t_new = (inner - new.point) @ new.direction
+        off_new = (inner - new.point) @ new.normal
+        width = self.width0 + self.width1 * t
+        slope_i = (off_new[1] - off_new[0]) / (t_new[1] - t_new[0])
+        slope_w = (width[1] - width[0]) / (t_new[1] - t_new[0])
+        return HiddenStripe(float(off_new[0] - slope_i * t_new[0]), float(slope_i),
+                            float(width[0] - slope_w * t_new[0]), float(slope_w), float(t_new[0]), float(t_new[1]))
+
+
+def past_hidden_stripe(position: np.ndarray, stripe_inner: np.ndarray, use: np.ndarray, t: np.ndarray,
+                       outward: int, growth: float, params: DetectorParams,
+                       prior: HiddenStripe | None = None) -> tuple[np.ndarray, int, HiddenStripe | None]:
+    """Boundary offsets moved past a border stripe where only its inner flank is seen.
+
+    A runway's side stripe is a painted line along the whole edge; outside it lies the ground.
+    Where the ground is as bright as the paint (sand, snow, light concrete in a grey frame) the
+    stripe's outer flank, the runway's edge, has no contrast, and the profile's only step is the
+    stripe's inner flank, a stripe's width inside the edge. A line fitted through a mix of both
+    (sand, monochrome, 392 m: 1.3 to 5 px inside wherever the sand was bright) leans inwards
+    toward the aircraft and the edge is refused as not straight or placed wrong.
+
+    Where enough profiles see both flanks (``params.hidden_stripe_min_fraction`` of those used),
+    their inner flanks and the stripe's width (the flanks' separation) are each a straight
+    function of the position along the line (a ground stripe's image width grows linearly with the
+    depth below the horizon, so along the edge). A profile whose only step lies on that inner line
+    (within ``params.hidden_stripe_tolerance`` of the width) is the stripe's inner flank: its
+    boundary is that step plus the stripe's width there. Nothing moves when the width is not
+    resolved (fewer than that many profiles see it ``params.hidden_stripe_min_px`` wide or more:
+    an unresolved stripe's flanks lie about 1.6 px apart whatever its width, and the correction
+    of :func:`boundary_offsets` applies), when the seen stripes do not agree on a straight width
+    or it does not widen the way the perspective does (texture beyond the edge, not a painted
+    stripe), and nowhere beyond half the length of the stretch where the stripe was seen from it.
+
+    Parameters
+    ----------
+    position, stripe_inner : ndarray, shape (n,)
+        :class:`BoundaryPoints` of the profiles, pixels.
+    use : ndarray of bool, shape (n,)
+        Profiles that hold the boundary.
+    t : ndarray, shape (n,)
+        Each profile's position along the line, pixels.
+    outward : int
+        +1/-1: the direction (along +/- offsets) of the region's outside.
+    growth : float
+        How the widest stripe expected changes along the line (the sign of its slope in t: the
+        near end is where it is wider); 0 when it does not.
+    params : DetectorParams
+        ``hidden_stripe_min_fraction``, ``hidden_stripe_min_px``, ``hidden_stripe_tolerance``,
+        ``hidden_stripe_max_scatter``.
+    prior : HiddenStripe, optional
+        The stripe an earlier pass of the same refinement found, in this pass's coordinates
+        (:meth:`HiddenStripe.restated`): used when this pass's profiles do not make one (the
+        narrower band sees fewer outer flanks), so one refinement does not decide twice.
+
+    Returns
+    -------
+    position : ndarray, shape (n,)
+        The offsets, moved past the stripe where its inner flank was the only step.
+    moved : int
+        How many were moved.
+    stripe : HiddenStripe or None
+        The stripe used.
+    """
+    out_dir = 1 if outward >= 0 else -1
+    stripe = _stripe_seen(position, stripe_inner, use, t, out_dir, growth, params) or prior
+    if stripe is None:
+        return position, 0, None
+    width_t = stripe.width0 + stripe.width1 * t
+    lone = use & ~np.isfinite(stripe_inner) & np.isfinite(position)
+    # near where the stripe was seen: its width is extrapolated by half that stretch at most
+    span = stripe.t_hi - stripe.t_lo
+    within = (t >= stripe.t_lo - 0.5 * span) & (t <= stripe.t_hi + 0.5 * span)
+    on_inner = (lone & within & (width_t >= params.hidden_stripe_min_px)
+                & (np.abs(position - (stripe.inner0 + stripe.inner1 * t)) <= params.hidden_stripe_tolerance * width_t))
+    return np.where(on_inner, position + out_dir * width_t, position), int(on_inner.sum()), stripe
+
+
+def _stripe_seen(position, stripe_inner, use, t, out_dir: int, growth: float,
+                 params: DetectorParams) -> HiddenStripe | None:
+    """The border stripe the profiles see both flanks of, or None when they do not make one
+    (:func:`past_hidden_stripe`)."""
+    seen = use & np.isfinite(stripe_inner) & np.isfinite(position)
+    width = np.where(seen, (position - stripe_inner) * out_dir, np.nan)
+    resolved = seen & (width >= params.hidden_stripe_min_px)
+    if resolved.sum() < max(HIDDEN_STRIPE_MIN_PROFILES, params.hidden_stripe_min_fraction * use.sum()):
+        return None
+    width_fit = _robust_linear(t[seen], width[seen])
+    inner_fit = _robust_linear(t[seen], stripe_inner[seen])
+    if width_fit is None or inner_fit is None:
+        return None
+    (w0, w1, w_sigma), (i0, i1, _) = width_fit, inner_fit
+    # the stripes seen must agree on one straight width (texture beyond the edge does not), and
+    # it must widen toward the near end as the stripe reach does (perspective)
+    if w_sigma > params.hidden_stripe_max_scatter * float(median_of(width[seen])):
+        return None
+    if growth and w1 * growth <= 0:
+        return None
+    return HiddenStripe(i0, i1, w0, w1, float(t[seen].min()), float(t[seen].max()))
+
+
+def _robust_linear(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float] | None:
+    """``(a, b, sigma)`` of ``y ~ a + b x`` by least squares, refitted once without the points more
+    than 3 robust sigmas off; ``sigma`` is the robust scatter (MAD) of the first fit's residuals."""
+    if x.size < 3 or np.ptp(x) <= 0:
+        return None
+    design = np.stack([np.ones_like(x), x], axis=1)
+    coef = np.linalg.lstsq(design, y, rcond=None)[0]
+    residual = y - design @ coef
+    sigma = MAD_TO_SIGMA * float(median_of(np.abs(residual - median_of(residual))))
+    keep = np.abs(residual) <= 3.0 * max(sigma, 0.05)
+    if keep.sum() >= 3 and np.ptp(x[keep]) > 0:
+        coef = np.linalg.lstsq(design[keep], y[keep], rcond=None)[0]
+    return float(coef[0]), float(coef[1]), sigma
 
 
 def _outer_crossings(signed: np.ndarray, peak: np.ndarray, out_dir: int, offsets: np.ndarray, fractions):
@@ -787,6 +943,10 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
     n = int(max(3, min(params.refine_samples, math.floor(length) + 1)))
     t = np.linspace(t0, t1, n)
     scale_band = 1.0
+    # once a border stripe hid its outer flank (past_hidden_stripe), later passes keep its inner
+    # flank within the band: the narrowed band around the boundary would lose it
+    inner_room = False
+    stripe = None
     current = line
     result = None
     for _ in range(iterations):
@@ -800,10 +960,15 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
                                             float(halfwidth.max()) + (float(stripe_reach.max()) if outward else 0.0)
                                             + KERNEL_ROOM_PX,
                                             step_px=BOUNDARY_STEP_PX if (kind == "edge" and outward) else 1.0)
-        window = np.abs(offsets)[None, :] <= halfwidth[:, None]
+        inward = stripe_reach if inner_room else 0.0
+        if outward:
+            offsets_out = offsets[None, :] * outward
+            window = (offsets_out >= -(halfwidth + inward)[:, None]) & (offsets_out <= halfwidth[:, None])
+        else:
+            window = np.abs(offsets)[None, :] <= halfwidth[:, None]
         if kind == "edge" and outward:
-            position, strength = boundary_offsets(profiles, offsets, outward, window, stripe_reach,
-                                                  params=params)
+            position, strength, stripe_inner = boundary_offsets(profiles, offsets, outward, window, stripe_reach,
+                                                                params=params)
             contrast = strength / RAMP_SLOPE_PER_STEP
         elif kind == "edge":
             position, strength = edge_offsets(profiles, offsets, polarity, window=window)
@@ -816,7 +981,8 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
             raise ValueError(f"kind must be 'edge' or 'stripe', got {kind!r}")
         position_out = position * (outward if outward else 1)
         reach_out = stripe_reach if outward else 0.0
-        located = np.isfinite(position) & (position_out >= -halfwidth) & (position_out <= halfwidth + reach_out)
+        located = (np.isfinite(position) & (position_out >= -(halfwidth + inward))
+                   & (position_out <= halfwidth + reach_out))
         keep = located & (contrast >= min_contrast)
         why = (f"{int(located.sum())} of {n} profiles hold a {kind} within the band, "
                f"{int(keep.sum())} of at least {min_contrast:g} grey levels")
@@ -835,6 +1001,11 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
             keep &= contrast >= params.refine_weak_fraction * median_of(contrast[keep])
         if keep.sum() < 3:
             return NoFit(f"no consistent step along the line ({why})")
+        if kind == "edge" and outward:
+            growth = float(np.sign(stripe_reach[-1] - stripe_reach[0]) * np.sign(t[-1] - t[0]))
+            position, moved, stripe = past_hidden_stripe(position, stripe_inner, keep, t, outward, growth, params,
+                                                         prior=stripe)
+            inner_room = inner_room or moved > 0
         points = centres + position[:, None] * current.normal
         weights = np.where(keep, np.minimum(strength, percentile_of(strength[keep], params.fit_weight_cap_percentile)),
                            0.0)
@@ -870,6 +1041,8 @@ def refine_line(image, line: PixelLine, t_range: tuple, kind: str = "edge", pola
             sigma_offset_px=sigma_offset, sigma_angle_rad=sigma_angle, n_inliers=n_in, points=points[inliers])
         # the next pass samples the same span around the fitted line, in a narrower band
         t = t_profiles
+        if stripe is not None:
+            stripe = stripe.restated(current, new_line)
         current = new_line
         scale_band /= 2.0
     return result

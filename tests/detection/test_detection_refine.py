@@ -163,3 +163,39 @@ def test_percentile_of_is_numpys_percentile_to_the_bit():
                 abs(float(got) - float(expected)) <= tolerance, (values, q)
             continue
         assert got == expected or (math.isnan(got) and math.isnan(expected)), (values, q)
+
+
+def test_boundary_past_a_side_stripe_hidden_by_ground_as_bright_as_the_paint():
+    """Sand as bright as the paint hides the side stripe's outer flank (the runway's edge) over
+    most of the edge; where the sand is darker both flanks show. The stripe widens toward the
+    near end (perspective, 2.4 to 5 px here). Mixed, the edge points lie on the boundary in one
+    stretch and a stripe's width inside it in the next: the line must still be the boundary, not
+    tilted between the two (as it is with the rule turned off: the test can fail)."""
+    point, angle = np.array([60.3, 59.7]), math.radians(63.0)
+    direction = np.array([math.cos(angle), math.sin(angle)])
+
+    def stripe_px(t):
+        return 3.7 + t / 30.0
+
+    def grey(u, v):
+        d = signed_distance(u, v, point, angle)               # > 0 outside the runway
+        t = (u - point[0]) * direction[0] + (v - point[1]) * direction[1]
+        hidden = np.floor((t + 100.0) / 9.0) % 5 < 3             # 60 % of the edge: sand = paint
+        outside = np.where(hidden, 235.0, 150.0)
+        return np.where(d > 0, outside, np.where(d > -stripe_px(t), 235.0, 84.0))
+
+    image = area_sampled(120, grey, noise=1.5, seed=6)
+    guess = PixelLine(point - 1.0 * np.array([-direction[1], direction[0]]), direction)
+
+    def refined(params):
+        return refine_line(image, guess, (-40, 40), "edge", halfwidth_px=6, outward=1,
+                           outward_reach_px=lambda t: 1.5 + 1.3 * stripe_px(np.asarray(t)), params=params)
+
+    t = np.linspace(-40, 40, 50)
+    truth = point + t[:, None] * direction
+    fit = refined(DetectorParams())
+    assert fit, fit.reason
+    assert np.abs(fit.line.distance(truth)).max() < 0.2
+    assert fit.residual_px < 0.3
+    without = refined(DetectorParams(hidden_stripe_min_fraction=1.0, hidden_stripe_min_px=100.0))
+    assert not without or np.abs(without.line.distance(truth)).max() > 0.8
