@@ -602,8 +602,18 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
 
 
 class BoundaryPoints(NamedTuple):
-    """A region's boundary located in each profile (:func:`boundary_offsets`): offsets along the
-    profiles' normal, pixels, NaN where none."""
+    """A region's boundary located in each profile (:func:`boundary_offsets`).
+
+    Parameters
+    ----------
+    position : ndarray, shape (n,)
+        Offset of the boundary along the profiles' normal, pixels (NaN where none).
+    strength : ndarray, shape (n,)
+        The chosen flank's grey-level slope, grey levels per pixel.
+    stripe_inner : ndarray, shape (n,)
+        Where the boundary lies on a border stripe's outer flank, the offset of the stripe's
+        inner flank, located as a lone step would be (NaN elsewhere).
+    """
 
     position: np.ndarray
     strength: np.ndarray
@@ -611,8 +621,18 @@ class BoundaryPoints(NamedTuple):
 
 
 class HiddenStripe(NamedTuple):
-    """A border stripe's inner line ``inner0 + inner1 t`` and width ``width0 + width1 t`` (offsets
-    along a line's normal, pixels, at positions t along it), seen between ``t_lo`` and ``t_hi``."""
+    """A border stripe along a line, as :func:`past_hidden_stripe` found it.
+
+    Parameters
+    ----------
+    inner0, inner1 : float
+        Its inner flank's offset along the line's normal, ``inner0 + inner1 t`` pixels at the
+        position t along the line.
+    width0, width1 : float
+        Its width, ``width0 + width1 t`` pixels.
+    t_lo, t_hi : float
+        The stretch of the line where it was seen, pixels along the line.
+    """
 
     inner0: float
     inner1: float
