@@ -572,20 +572,22 @@ def boundary_offsets(profiles: np.ndarray, offsets: np.ndarray, outward: int, wi
     inner, _ = centroid(p1, sign1)
     striped = has_outer & ~has_same
     stripe_inner = np.where(striped, inner, np.nan)
-    if outer_flank:
-        # the lobe's outer flank, extrapolated: where it falls to 60 % and 20 % of the peak, the
+    def flank_edge(signed, peak):
+        # a lobe's outer flank, extrapolated: where it falls to 60 % and 20 % of the peak, the
         # edge lies at 2 x60 - x20 (for the lobe of an area-sampled step seen through bilinear
         # interpolation and a central difference this lands 0.11 px outside, ``flank_bias_px``);
         # a blurred ramp of texture inside the edge widens the lobe inwards only and does not
         # move this
-        flank = _outer_crossings(g0 * lobe_sign[:, None], chosen, out_dir, offsets, (0.6, 0.2))
-        extrapolated = 2.0 * flank[0] - flank[1] - flank_bias_px * out_dir
+        x60, x20 = _outer_crossings(signed, peak, out_dir, offsets, (0.6, 0.2))
+        return 2.0 * x60 - x20 - flank_bias_px * out_dir
+
+    if outer_flank:
+        extrapolated = flank_edge(g0 * lobe_sign[:, None], chosen)
         position = np.where(np.isfinite(extrapolated), extrapolated, position)
         if striped.any():
             # the stripe's inner flank placed the way a lone step is (its own lobe's outer flank)
             rows_s = np.nonzero(striped)[0]
-            flank_s = _outer_crossings(g0[rows_s] * sign1[rows_s, None], p1[rows_s], out_dir, offsets, (0.6, 0.2))
-            stripe_inner[rows_s] = 2.0 * flank_s[0] - flank_s[1] - flank_bias_px * out_dir
+            stripe_inner[rows_s] = flank_edge(g0[rows_s] * sign1[rows_s, None], p1[rows_s])
     # a stripe narrower than about two pixels is not resolved: area sampling spreads each of its
     # flanks over a pixel, which puts the outer flank's centroid about half a pixel outside the
     # boundary; the flanks' separation tells (under 1.6 px for stripes up to 1.5 px wide, 2 px
