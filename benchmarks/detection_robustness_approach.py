@@ -37,7 +37,11 @@ Writes the per-frame CSV (``--out``), the per-condition CSV (``--out`` with
 ``_conditions.csv``), prints a line per condition, the markdown table, and the figures as JSON
 (last line). ``--reuse`` scores run folders already in ``--work`` without rendering them again;
 ``--save-failures N`` renders again up to N failing frames (not found or gross) per condition and
-writes them as PNG next to the runs.
+writes them as PNG next to the runs. ``--define NAME JSON`` adds a condition of one's own (scene
+fields, runway size, lens), e.g. the sensor condition's parts one at a time::
+
+    --define 'JPEG 50' '{"jpeg_quality": 50}' --define 'blur 1 px' '{"blur_sigma_px": 1.0}' \\
+        --conditions 'JPEG 50' 'blur 1 px'
 """
 from __future__ import annotations
 
@@ -258,6 +262,31 @@ def run_condition(name: str, args) -> tuple[list[dict], dict, Path, Path]:
     return rows, dh_at_100ft(run), diverged(run), run
 
 
+def defined_condition(text: str) -> tuple:
+    """A :data:`CONDITIONS` entry ``((length_m, width_m), scene_overrides, distortion)`` from the
+    JSON of ``--define`` (module docstring); ValueError with one sentence if it is not one."""
+    from visland.render import SceneParams
+    try:
+        spec = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ValueError(f"not JSON ({error.msg} at character {error.pos})") from None
+    if not isinstance(spec, dict):
+        raise ValueError("must be a JSON object of SceneParams fields")
+    runway = spec.pop("runway_m", (3000.0, 45.0))
+    distortion = spec.pop("distortion", None)
+    if not (isinstance(runway, (list, tuple)) and len(runway) == 2
+            and all(isinstance(x, (int, float)) and x > 0 for x in runway)):
+        raise ValueError(f"runway_m must be [length, width] in metres, both positive, got {runway!r}")
+    if distortion is not None and not (isinstance(distortion, (list, tuple)) and len(distortion) == 5
+                                       and all(isinstance(x, (int, float)) for x in distortion)):
+        raise ValueError(f"distortion must be 5 numbers [k1, k2, p1, p2, k3], got {distortion!r}")
+    try:
+        SceneParams(**spec)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"not a scene: {error}") from None
+    return (float(runway[0]), float(runway[1])), spec, None if distortion is None else tuple(distortion)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--size", type=int, default=1024)
@@ -271,7 +300,16 @@ def main(argv=None) -> int:
     parser.add_argument("--reuse", action="store_true", help="score runs already in --work instead of rendering")
     parser.add_argument("--save-failures", type=int, default=0, metavar="N",
                         help="render again up to N failing frames per condition into WORK/CONDITION/failures/")
+    parser.add_argument("--define", nargs=2, action="append", default=[], metavar=("NAME", "JSON"),
+                        help="a condition of your own, then named in --conditions: SceneParams fields as a JSON "
+                             "object, optionally \"runway_m\": [length, width] (default 3000 x 45) and "
+                             "\"distortion\": [k1, k2, p1, p2, k3]; e.g. --define 'JPEG 50' '{\"jpeg_quality\": 50}'")
     args = parser.parse_args(argv)
+    for name, text in args.define:
+        try:
+            CONDITIONS[name] = defined_condition(text)
+        except ValueError as error:
+            parser.error(f"--define {name!r}: {error}")
     unknown = [c for c in args.conditions if c not in CONDITIONS]
     if unknown:
         parser.error(f"unknown conditions {unknown}; known: {', '.join(CONDITIONS)}")

@@ -121,3 +121,15 @@ def test_summary_and_verdict_count_the_planted_errors(study, folders):
     table = study.markdown_table({"c": {"summary": study.summarise_rows(clean), "dh_100ft_m": dh, "diverged": lost,
                                         "pass": study.passes(study.summarise_rows(clean), dh)}})
     assert "| diverged at 48 s / 1.50 | no |" in table[2]
+
+
+def test_define_makes_a_condition_of_ones_own_and_names_what_is_wrong(study):
+    assert study.defined_condition('{"jpeg_quality": 50}') == ((3000.0, 45.0), {"jpeg_quality": 50}, None)
+    runway, scene, lens = study.defined_condition(
+        '{"surface": "concrete", "runway_m": [1800, 30], "distortion": [-0.1, 0, 0, 0, 0]}')
+    assert runway == (1800.0, 30.0) and scene == {"surface": "concrete"} and lens == (-0.1, 0, 0, 0, 0)
+    for text, words in (('{"jpeg_quality": ', "not JSON"), ("[50]", "JSON object"),
+                        ('{"runway_m": [3000]}', "runway_m"), ('{"distortion": [0.1]}', "distortion"),
+                        ('{"no_such_field": 1}', "no_such_field"), ('{"jpeg_quality": 500}', "jpeg_quality")):
+        with pytest.raises(ValueError, match=words):
+            study.defined_condition(text)
