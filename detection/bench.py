@@ -25,6 +25,11 @@ from visland.detection.params import DetectorParams
 
 __all__ = ["BenchFrames", "frames_from_folder", "render_frames", "run_bench"]
 
+#: Tracking speed the first detector had to reach (frames per second, wall time).
+TRACKING_TARGET_FPS = 50.0
+#: Tracking speed detection on unknown runways (issue 11) must keep at 2048x2048.
+UNKNOWN_RUNWAY_TARGET_FPS = 60.0
+
 
 class BenchFrames:
     """Sequences of consecutive RGB frames (what ``detect`` and ``process`` feed the detector)
@@ -213,7 +218,11 @@ def _timed(frames: BenchFrames, params: DetectorParams, repeat: int) -> dict:
         "tracking_mode_rate": round(float(np.mean(tracking_mode)), 3) if tracking_mode else None,
         "load_average_1min": round(os.getloadavg()[0], 2) if hasattr(os, "getloadavg") else None,
     }
-    figures["meets_targets"] = bool(acquisition_median < 0.2 and tracking_median > 0 and 1.0 / tracking_median >= 50)
+    tracking_fps = 1.0 / tracking_median if tracking_median > 0 else 0.0
+    # the first detector's targets (acquisition under 200 ms, tracking at 50 frames/s), and the
+    # 60 frames/s that detection on unknown runways must keep while doing more per frame
+    figures["meets_targets"] = bool(acquisition_median < 0.2 and tracking_fps >= TRACKING_TARGET_FPS)
+    figures["meets_unknown_runway_speed"] = bool(tracking_fps >= UNKNOWN_RUNWAY_TARGET_FPS)
     # CPU time counts what this process did whatever else runs on the machine (OpenCV may use
     # both cores, so it can exceed the wall time on an idle machine)
     cpu_tracking_median = figures["tracking_cpu_median_ms"]
@@ -232,7 +241,9 @@ def print_report(frames: BenchFrames, figures: dict) -> None:
     print(f"  tracking (region of interest): median {figures['tracking_median_ms']:.2f} ms "
           f"({figures['tracking_fps']} frames/s; CPU {figures['tracking_cpu_median_ms']} ms), runway found in "
           f"{100 * (figures['tracking_found_rate'] or 0):.0f} %, {100 * (figures['tracking_mode_rate'] or 0):.0f} % "
-          f"without falling back to the whole frame (target >= 50 frames/s)")
+          f"without falling back to the whole frame (targets >= {TRACKING_TARGET_FPS:g} frames/s, "
+          f">= {UNKNOWN_RUNWAY_TARGET_FPS:g} on unknown runways: "
+          f"{'met' if figures['meets_unknown_runway_speed'] else 'not met'})")
     if figures.get("load_average_1min") is not None:
         print(f"  machine load average (1 min): {figures['load_average_1min']} on {os.cpu_count()} cores, "
               f"{figures.get('opencv_threads')} OpenCV threads")

@@ -78,6 +78,8 @@ def test_bench_detect_ends_with_a_json_line(folder, capsys):
     for key in ("acquisition_median_s", "tracking_median_ms", "tracking_fps", "tracking_found_rate"):
         assert figures[key] is not None
     assert figures["opencv_threads"] == cv2.getNumThreads()
+    # issue 11's speed target (60 frames/s) is reported next to the first detector's (50)
+    assert figures["meets_unknown_runway_speed"] == (figures["tracking_fps"] >= 60.0)
 
 
 @pytest.mark.slow
