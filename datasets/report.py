@@ -206,13 +206,22 @@ def _pixel_errors(measurements, labels, camera):
 def _plot_pixel_errors(t, errors):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(12, 3.2))
+    plotted = 0
     for name, series in errors.items():
         if np.isfinite(series).any():
             ax.semilogy(t, np.maximum(series, 1e-3), ".", ms=2, label=name)
+            plotted += 1
     ax.set_xlabel("t (s)")
     ax.set_ylabel("error (px)")
     ax.set_title("image-processing error against the labels")
-    ax.legend(fontsize=7, ncol=3)
+    if plotted:
+        ax.legend(fontsize=7, ncol=3)
+    else:
+        # a run without a measured frame: say so rather than draw empty axes
+        ax.text(0.5, 0.5, "no frame was measured: nothing to compare with the labels", transform=ax.transAxes,
+                ha="center", va="center")
+        if len(t) > 1:
+            ax.set_xlim(float(np.min(t)), float(np.max(t)))
     return figure_to_data_uri(fig)
 
 
