@@ -264,8 +264,14 @@ def run_condition(name: str, args) -> tuple[list[dict], dict, Path, Path]:
 
 def defined_condition(text: str) -> tuple:
     """A :data:`CONDITIONS` entry ``((length_m, width_m), scene_overrides, distortion)`` from the
-    JSON of ``--define`` (module docstring); ValueError with one sentence if it is not one."""
+    JSON of ``--define`` (module docstring); ValueError with one sentence if it is not one. The
+    runway, the scene and the lens are checked by the classes that will use them (``Runway``,
+    ``SceneParams``, ``CameraModel``), so a condition is refused here for what they would refuse."""
+    from dataclasses import replace
+
+    from visland.camera import CameraModel
     from visland.render import SceneParams
+    from visland.runway import Runway
     try:
         spec = json.loads(text)
     except json.JSONDecodeError as error:
@@ -274,17 +280,16 @@ def defined_condition(text: str) -> tuple:
         raise ValueError("must be a JSON object of SceneParams fields")
     runway = spec.pop("runway_m", (3000.0, 45.0))
     distortion = spec.pop("distortion", None)
-    if not (isinstance(runway, (list, tuple)) and len(runway) == 2
-            and all(isinstance(x, (int, float)) and x > 0 for x in runway)):
-        raise ValueError(f"runway_m must be [length, width] in metres, both positive, got {runway!r}")
-    if distortion is not None and not (isinstance(distortion, (list, tuple)) and len(distortion) == 5
-                                       and all(isinstance(x, (int, float)) for x in distortion)):
-        raise ValueError(f"distortion must be 5 numbers [k1, k2, p1, p2, k3], got {distortion!r}")
+    if not (isinstance(runway, (list, tuple)) and len(runway) == 2):
+        raise ValueError(f"runway_m must be [length, width] in metres, got {runway!r}")
+    runway = Runway(length_m=runway[0], width_m=runway[1])
+    if distortion is not None:
+        distortion = replace(CameraModel.default(64), distortion=distortion).distortion
     try:
         SceneParams(**spec)
-    except (TypeError, ValueError) as error:
+    except TypeError as error:                # an unknown field
         raise ValueError(f"not a scene: {error}") from None
-    return (float(runway[0]), float(runway[1])), spec, None if distortion is None else tuple(distortion)
+    return (float(runway.length_m), float(runway.width_m)), spec, distortion
 
 
 def main(argv=None) -> int:
