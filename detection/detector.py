@@ -826,6 +826,7 @@ def _measure(ctx: _Context, hypothesis: RunwayHypothesis, mode: str, roi, predic
     fits, why = _refine_edges(ctx, hypothesis, prediction, bottom_depth)
     if fits is None:
         return None, why
+    fits = _past_staircase_stripes(ctx, fits)
     pair, why = _pair_edges(ctx, fits, prediction)
     if pair is None:
         return None, why
@@ -1001,6 +1002,140 @@ BALANCE_PROFILES = 24
 BALANCE_SPAN = (0.1, 0.9)
 
 
+def _across_edge(segment_uv: np.ndarray, other_uv: np.ndarray):
+    """Where to sample across the edge ``segment_uv`` (far and near end points, pixels) of a
+    runway whose other edge is ``other_uv``: ``(points, direction, outward, width)``, the
+    :data:`BALANCE_PROFILES` points spread over :data:`BALANCE_SPAN` of the edge (n, 2), its unit
+    direction, its unit normal pointing away from the other edge (out of the runway) and the
+    runway's width at each point (the distance to the other edge's line, pixels). None when either
+    segment is shorter than a pixel."""
+    segment, other = np.asarray(segment_uv, float), np.asarray(other_uv, float)
+    direction = segment[1] - segment[0]
+    length = float(np.hypot(*direction))
+    other_direction = other[1] - other[0]
+    if length < 1.0 or float(np.hypot(*other_direction)) < 1.0:
+        return None
+    direction /= length
+    other_normal = np.array([-other_direction[1], other_direction[0]]) / float(np.hypot(*other_direction))
+    outward = np.array([-direction[1], direction[0]])
+    if (other.mean(axis=0) - segment.mean(axis=0)) @ outward > 0:
+        outward = -outward
+    points = segment[0] + np.outer(np.linspace(*BALANCE_SPAN, BALANCE_PROFILES) * length, direction)
+    width = np.abs((points - other[0]) @ other_normal)
+    return points, direction, outward, width
+
+
+def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams):
+    """Where a second grey-level step of the edge's own sign lies beyond the edge ``segment_uv``,
+    as a fraction of the runway's local width, at each of :data:`BALANCE_PROFILES` points:
+    ``(ratios, widest_px)``, NaN where a profile has none, and the runway's largest width across
+    the points sampled. None when the segments are too short to sample.
+
+    Each profile runs outwards from the edge (offset 0). The edge's own step is the strongest
+    slope within ``edge_blur_px`` of it; the second step is the strongest local maximum of the
+    slope of the same sign from 2 px out to ``side_stripe_width_fraction`` of the local width plus
+    ``edge_blur_px``, at least ``staircase_step_ratio`` of the first, its place refined to a
+    fraction of a sample by a parabola through its peak.
+    """
+    across = _across_edge(segment_uv, other_uv)
+    if across is None:
+        return None
+    points, direction, outward, width = across
+    if params.side_stripe_width_fraction * width.max() < params.staircase_min_px:
+        return None                     # no stripe looked for could be wide enough to count
+    reach = params.side_stripe_width_fraction * width + params.edge_blur_px
+    step = 0.5
+    profiles, offsets = sample_profiles(image, points, outward, direction, float(reach.max()) + 3.0, step_px=step)
+    slope = np.zeros(profiles.shape)
+    slope[:, 1:-1] = np.nan_to_num((profiles[:, 2:] - profiles[:, :-2]) / (2.0 * step))
+    rows = np.arange(len(points))
+    at_edge = np.abs(offsets) <= params.edge_blur_px
+    edge_slopes = slope[:, at_edge]
+    strongest = np.argmax(np.abs(edge_slopes), axis=1)
+    sign = np.sign(edge_slopes[rows, strongest])
+    edge_slope = np.abs(edge_slopes[rows, strongest])
+    same = sign[:, None] * slope
+    peak = np.zeros(same.shape, dtype=bool)
+    peak[:, 1:-1] = (same[:, 1:-1] >= same[:, :-2]) & (same[:, 1:-1] > same[:, 2:])
+    beyond = (offsets[None, :] >= 2.0) & (offsets[None, :] <= reach[:, None])
+    candidate = np.where(peak & beyond & (same >= params.staircase_step_ratio * edge_slope[:, None])
+                         & (edge_slope[:, None] > 0.0), same, -np.inf)
+    j = np.argmax(candidate, axis=1)
+    found = np.isfinite(candidate[rows, j])
+    jc = np.clip(j, 1, len(offsets) - 2)
+    left, centre, right = same[rows, jc - 1], same[rows, jc], same[rows, jc + 1]
+    curvature = left - 2.0 * centre + right
+    with np.errstate(divide="ignore", invalid="ignore"):
+        delta = np.clip(np.where(curvature < 0.0, 0.5 * (left - right) / curvature, 0.0), -0.5, 0.5)
+    ratios = np.where(found, (offsets[jc] + delta * step) / width, np.nan)
+    return ratios, float(width.max())
+
+
+def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
+    """The two edges moved out past their side stripes where both are seen as staircases.
+
+    A side stripe a little darker than the ground beyond it (snow, light sand in a grey frame) is
+    no bright band but a staircase: the pavement's strong step onto the paint, then a weaker step
+    of the same sign onto the ground, the runway's true edge. :func:`refine.boundary_offsets`
+    takes the outer step only where it reaches ``boundary_same_step_ratio`` of the inner one's
+    slope; weaker, each edge is placed on the stripe's inner flank, a stripe's width inside
+    (the robustness study's 'variety 3', snow beyond a worn stripe, below 200 m at 2048 px: both
+    edges 14-24 px inside, reported with confidence 0.4-0.8).
+
+    A painted side stripe is a ground constant: its width is the same fraction of the runway's
+    width all along both edges (the perspective scales both alike), where texture beyond the
+    edge (sand's brighter patches) lies anywhere. So the edges move only where on both edges
+    ``staircase_min_fraction`` of the profiles (:func:`_staircase_ratios`) see the second step,
+    at fractions of the local width whose robust scatter is within ``staircase_max_scatter`` of
+    their median on each edge, whose medians agree within ``staircase_agreement`` and are at most
+    ``side_stripe_width_fraction``, and where the stripe is at least ``staircase_min_px`` wide at
+    the edges' widest. Each edge then moves out by the two medians' mean times the local width:
+    a turn about the vanishing point (the width, and the shift, are zero there), so the edges
+    still meet on the horizon. Returns ``fits``, the two edges replaced when they moved.
+    """
+    params = ctx.params
+    segments = {name: _segment_in_depth(ctx.horizon, fits[name]) for name in ("left", "right")}
+    medians = []
+    for name, other in (("left", "right"), ("right", "left")):
+        seen = _staircase_ratios(ctx.image, segments[name], segments[other], params)
+        if seen is None:
+            return fits
+        ratios, widest_px = seen
+        held = ratios[np.isfinite(ratios)]
+        if len(held) < max(3, params.staircase_min_fraction * len(ratios)):
+            return fits
+        median = float(np.median(held))
+        scatter = float(np.median(np.abs(held - median)))
+        if not (0.0 < median <= params.side_stripe_width_fraction and scatter <= params.staircase_max_scatter * median
+                and median * widest_px >= params.staircase_min_px):
+            return fits
+        medians.append(median)
+    if abs(medians[0] - medians[1]) > params.staircase_agreement * max(medians):
+        return fits
+    ratio = 0.5 * (medians[0] + medians[1])
+    moved = {}
+    for name, other in (("left", "right"), ("right", "left")):
+        fit = fits[name]
+        other_line = fits[other].line
+        outward = fit.line.normal if (other_line.point - fit.line.point) @ fit.line.normal < 0 else -fit.line.normal
+
+        def shifted(uv):
+            uv = np.atleast_2d(np.asarray(uv, float))
+            return uv + ratio * np.abs(other_line.distance(uv))[:, None] * outward
+
+        far, near = shifted(fit.line.point + np.outer((-100.0, 100.0), fit.line.direction))
+        direction = (near - far) / float(np.hypot(*(near - far)))
+        point = shifted(fit.line.point)[0]
+        points = shifted(fit.points)
+        along = (points - point) @ direction
+        note = (f"moved out past its side stripe ({100 * ratio:.1f} % of the runway's width: a staircase "
+                "beyond both edges)")
+        moved[name] = replace(fit, line=PixelLine(point=point, direction=direction), points=points,
+                              extent=(float(along.min()), float(along.max())),
+                              note="; ".join(filter(None, [fit.note, note])))
+    return moved
+
+
 def _edge_step(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams) -> float:
     """Median level just outside the edge ``segment_uv`` minus inside it past a side stripe.
 
@@ -1012,19 +1147,10 @@ def _edge_step(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: Dete
     refinement measures each profile's net step); the band is 15 % of the local width, 1.5 to 8 px.
     ``image`` is grey levels or RGB (its chroma is sampled). NaN when nothing is sampled.
     """
-    segment, other = np.asarray(segment_uv, float), np.asarray(other_uv, float)
-    direction = segment[1] - segment[0]
-    length = float(np.hypot(*direction))
-    other_direction = other[1] - other[0]
-    if length < 1.0 or float(np.hypot(*other_direction)) < 1.0:
+    across = _across_edge(segment_uv, other_uv)
+    if across is None:
         return math.nan
-    direction /= length
-    other_normal = np.array([-other_direction[1], other_direction[0]]) / float(np.hypot(*other_direction))
-    outward = np.array([-direction[1], direction[0]])
-    if (other.mean(axis=0) - segment.mean(axis=0)) @ outward > 0:
-        outward = -outward
-    points = segment[0] + np.outer(np.linspace(*BALANCE_SPAN, BALANCE_PROFILES) * length, direction)
-    width = np.abs((points - other[0]) @ other_normal)
+    points, direction, outward, width = across
     reach = params.side_stripe_width_fraction * width + params.edge_blur_px
     band = np.clip(0.15 * width, 1.5, 8.0)
     profiles, offsets = sample_profiles(image, points, outward, direction, float((reach + band).max()) + 3.0)

@@ -84,7 +84,7 @@ NOT_SCALED_PX = (
     "faint_texture_max_width_px", "crossing_pavement_depth_px", "crossing_pavement_min_width_px",
     # calibrated sub-pixel corrections of an area-sampled boundary (refine)
     "boundary_flank_bias_px", "boundary_stripe_shift_px", "boundary_stripe_resolved_px",
-    "boundary_stripe_shift_scale_px", "hidden_stripe_min_px",
+    "boundary_stripe_shift_scale_px", "hidden_stripe_min_px", "staircase_min_px",
     # candidate lines' sub-pixel profile lengths and floors (candidates)
     "check_min_span_px", "check_transition_halfspan_px", "check_transition_side_px", "check_line_min_sigma_px",
     # the blur of the ground's step into the pavement, read past (threshold_marking.marked_at_start)
@@ -433,6 +433,23 @@ class DetectorParams(ParamsFile):
     hidden_stripe_max_scatter : float
         ... and the stripes seen agree on a straight width within this fraction of it (robust
         scatter): texture beyond the edge does not.
+    staircase_min_fraction : float
+        A side stripe a little darker than the ground beyond it (snow, light sand) is a staircase:
+        the pavement's step onto the paint, then a weaker one of the same sign onto the ground, the
+        runway's edge. Where on both edges this fraction of the profiles sampled across them
+        (:func:`detector._past_staircase_stripes`) see such a second step beyond the edge found...
+    staircase_step_ratio : float
+        ... of at least this fraction of the edge's own slope, ...
+    staircase_max_scatter : float
+        ... at a fraction of the runway's local width that is the same along each edge within this
+        fraction of it (robust scatter: texture beyond the edge has none) ...
+    staircase_agreement : float
+        ... and the same on both edges within this fraction (the two side stripes are painted
+        alike), ...
+    staircase_min_px : float
+        ... and the stripe is at least this wide where the edges are farthest apart (pixels of the
+        frame: narrower, the boundary refinement's own stripe handling applies), both edges are
+        moved out past their stripes.
     net_step_outside_px, net_step_inside_px : tuple of 2 float
         A boundary's net grey-level change: mean between the first's distances outside it minus
         the mean between the second's distances inside the border stripe's reach (pixels).
@@ -951,6 +968,11 @@ class DetectorParams(ParamsFile):
     hidden_stripe_min_px: float = 2.0
     hidden_stripe_tolerance: float = 0.35
     hidden_stripe_max_scatter: float = 0.25
+    staircase_min_fraction: float = 0.6
+    staircase_step_ratio: float = 0.12
+    staircase_max_scatter: float = 0.2
+    staircase_agreement: float = 0.2
+    staircase_min_px: float = 3.0
     net_step_outside_px: tuple = (1.0, 3.0)
     net_step_inside_px: tuple = (0.5, 3.0)
     min_edge_support: float = 0.45
@@ -1150,7 +1172,8 @@ class DetectorParams(ParamsFile):
         "boundary_stripe_shift_px": (0.0, 10.0), "boundary_stripe_resolved_px": (0.0, 100.0),
         "boundary_stripe_shift_scale_px": (0.01, 100.0), "hidden_stripe_min_fraction": (0.0, 1.0),
         "hidden_stripe_min_px": (0.0, 100.0), "hidden_stripe_tolerance": (0.0, 1.0),
-        "hidden_stripe_max_scatter": (0.0, 10.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
+        "hidden_stripe_max_scatter": (0.0, 10.0), "staircase_min_fraction": (0.0, 1.0), "staircase_step_ratio": (0.0, 10.0),
+        "staircase_max_scatter": (0.0, 10.0), "staircase_agreement": (0.0, 10.0), "staircase_min_px": (0.0, 1000.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
         "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
         "block_sample_rows": (1, 4096, "int"), "block_grid_px": (2, 64, "int"),
         "block_grid_min_ratio": (1.0, 100.0), "deblock_min_grid_step": (0.0, 255.0), "deblock_sigma_px": (0.0, 10.0),
