@@ -1028,8 +1028,10 @@ def _across_edge(segment_uv: np.ndarray, other_uv: np.ndarray):
 def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams):
     """Where a second grey-level step of the edge's own sign lies beyond the edge ``segment_uv``,
     as a fraction of the runway's local width, at each of :data:`BALANCE_PROFILES` points:
-    ``(ratios, widest_px)``, NaN where a profile has none, and the runway's largest width across
-    the points sampled. None when the segments are too short to sample.
+    ``(ratios, width_px, points, outward)``, NaN where a profile has none, the runway's width at
+    each point, the points (n, 2) and the edge's outward unit normal (:func:`_across_edge`).
+    None when the segments are too short to sample or the runway too narrow for the widest
+    stripe looked for to be ``staircase_min_px`` wide.
 
     Each profile runs outwards from the edge (offset 0). The edge's own step is the strongest
     slope within ``edge_blur_px`` of it; the second step is the strongest local maximum of the
@@ -1068,7 +1070,7 @@ def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, param
     with np.errstate(divide="ignore", invalid="ignore"):
         delta = np.clip(np.where(curvature < 0.0, 0.5 * (left - right) / curvature, 0.0), -0.5, 0.5)
     ratios = np.where(found, (offsets[jc] + delta * step) / width, np.nan)
-    return ratios, float(width.max())
+    return ratios, width, points, outward
 
 
 def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
@@ -1088,26 +1090,40 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
     ``staircase_min_fraction`` of the profiles (:func:`_staircase_ratios`) see the second step,
     at fractions of the local width whose robust scatter is within ``staircase_max_scatter`` of
     their median on each edge, whose medians agree within ``staircase_agreement`` and are at most
-    ``side_stripe_width_fraction``, and where the stripe is at least ``staircase_min_px`` wide at
-    the edges' widest. Each edge then moves out by the two medians' mean times the local width:
+    ``side_stripe_width_fraction`` (the fraction of profiles counted where a stripe that wide is
+    at least ``staircase_min_px`` wide, three profiles at least). Each edge then moves out by the two medians' mean times the local width:
     a turn about the vanishing point (the width, and the shift, are zero there), so the edges
     still meet on the horizon. Returns ``fits``, the two edges replaced when they moved.
     """
     params = ctx.params
-    segments = {name: _segment_in_depth(ctx.horizon, fits[name]) for name in ("left", "right")}
-    medians = []
+    # both edges looked across over the depths either is supported over (where one edge's
+    # near part was not held, the other's may see the stripe widest)
+    supported = [_segment_in_depth(ctx.horizon, fits[name]) for name in ("left", "right")]
+    depths = ctx.horizon.to_sd(np.concatenate(supported))[:, 1]
+    d_far, d_near = float(depths.min()), float(depths.max())
+    segments = {}
+    for name in ("left", "right"):
+        line = fits[name].line.homogeneous()
+        ends = [np.cross(line, ctx.horizon.parallel_h(d)) for d in (d_far, d_near)]
+        if any(abs(end[2]) < 1e-12 for end in ends):
+            return fits
+        segments[name] = np.array([end[:2] / end[2] for end in ends])
+    medians, seen_on = [], {}
     for name, other in (("left", "right"), ("right", "left")):
-        seen = _staircase_ratios(ctx.image, segments[name], segments[other], params)
+        seen = seen_on[name] = _staircase_ratios(ctx.image, segments[name], segments[other], params)
         if seen is None:
             return fits
-        ratios, widest_px = seen
-        held = ratios[np.isfinite(ratios)]
-        if len(held) < max(3, params.staircase_min_fraction * len(ratios)):
+        ratios, width, _, _ = seen
+        held = np.isfinite(ratios)
+        if held.sum() < 3:
             return fits
-        median = float(np.median(held))
-        scatter = float(np.median(np.abs(held - median)))
+        median = float(np.median(ratios[held]))
+        scatter = float(np.median(np.abs(ratios[held] - median)))
+        # counted where a stripe that wide is resolved (its width grows along the edge: far
+        # out it merges with the step onto it)
+        resolved = width * median >= params.staircase_min_px
         if not (0.0 < median <= params.side_stripe_width_fraction and scatter <= params.staircase_max_scatter * median
-                and median * widest_px >= params.staircase_min_px):
+                and resolved.sum() >= 3 and (held & resolved).sum() >= params.staircase_min_fraction * resolved.sum()):
             return fits
         medians.append(median)
     if abs(medians[0] - medians[1]) > params.staircase_agreement * max(medians):
@@ -1116,21 +1132,21 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
     moved = {}
     for name, other in (("left", "right"), ("right", "left")):
         fit = fits[name]
+        ratios, width, sampled, outward = seen_on[name]
+        # the edge through the steps onto the ground where seen, elsewhere a stripe's width out:
+        # the steps place it where the fit found was held on part of the edge only (turned)
+        outer = sampled + (np.where(np.isfinite(ratios), ratios, ratio) * width)[:, None] * outward
+        point = outer.mean(axis=0)
+        direction = np.linalg.svd(outer - point)[2][0]
+        if direction @ fit.line.direction < 0.0:
+            direction = -direction
+        line = PixelLine(point=point, direction=direction)
         other_line = fits[other].line
-        outward = fit.line.normal if (other_line.point - fit.line.point) @ fit.line.normal < 0 else -fit.line.normal
-
-        def shifted(uv):
-            uv = np.atleast_2d(np.asarray(uv, float))
-            return uv + ratio * np.abs(other_line.distance(uv))[:, None] * outward
-
-        far, near = shifted(fit.line.point + np.outer((-100.0, 100.0), fit.line.direction))
-        direction = (near - far) / float(np.hypot(*(near - far)))
-        point = shifted(fit.line.point)[0]
-        points = shifted(fit.points)
+        points = fit.points + (ratio * np.abs(other_line.distance(fit.points)))[:, None] * outward
         along = (points - point) @ direction
         note = (f"moved out past its side stripe ({100 * ratio:.1f} % of the runway's width: a staircase "
                 "beyond both edges)")
-        moved[name] = replace(fit, line=PixelLine(point=point, direction=direction), points=points,
+        moved[name] = replace(fit, line=line, points=points,
                               extent=(float(along.min()), float(along.max())),
                               note="; ".join(filter(None, [fit.note, note])))
     return moved

@@ -447,9 +447,8 @@ class DetectorParams(ParamsFile):
         ... and the same on both edges within this fraction (the two side stripes are painted
         alike), ...
     staircase_min_px : float
-        ... and the stripe is at least this wide where the edges are farthest apart (pixels of the
-        frame: narrower, the boundary refinement's own stripe handling applies), both edges are
-        moved out past their stripes.
+        ... the profiles counted where the stripe is at least this wide (pixels of the frame:
+        narrower, it merges with the step onto it), both edges are moved out past their stripes.
     net_step_outside_px, net_step_inside_px : tuple of 2 float
         A boundary's net grey-level change: mean between the first's distances outside it minus
         the mean between the second's distances inside the border stripe's reach (pixels).
@@ -971,8 +970,8 @@ class DetectorParams(ParamsFile):
     staircase_min_fraction: float = 0.6
     staircase_step_ratio: float = 0.12
     staircase_max_scatter: float = 0.2
-    staircase_agreement: float = 0.2
-    staircase_min_px: float = 3.0
+    staircase_agreement: float = 0.3
+    staircase_min_px: float = 2.5
     net_step_outside_px: tuple = (1.0, 3.0)
     net_step_inside_px: tuple = (0.5, 3.0)
     min_edge_support: float = 0.45

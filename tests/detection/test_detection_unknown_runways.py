@@ -12,7 +12,7 @@ import pytest
 from tests.helpers.detection_frames import airport_frame, edge_error_px
 from tests.helpers.raycast_airport import PaintedAirport
 from visland.camera import CameraModel
-from visland.detection import DetectionSequence, detect_runway
+from visland.detection import DetectionSequence, DetectorParams, detect_runway
 from visland.runway import Runway
 
 BARREL = (-0.22, 0.06, 0.0005, -0.0003, -0.008)
@@ -84,3 +84,25 @@ def test_a_taxiway_joining_near_the_threshold_never_becomes_the_threshold():
             withheld += 1
     assert found >= len(distances) - 1
     assert withheld <= len(distances) // 4
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("distance", [150.0, 80.0])
+def test_side_stripes_a_little_darker_than_the_snow_beyond_them(distance):
+    """Worn side stripes (grey 196) between the asphalt (72) and snow (232 +- 12): each edge is a
+    staircase, a strong step onto the paint and a weaker one onto the snow, the runway's edge.
+    Taken at the strong step, both edges lie a stripe's width inside (4-7 px here, near corners
+    5-7 px off, reported found); moved past both stripes they are within a pixel."""
+    camera = CameraModel.default(512)
+    scene = PaintedAirport(seed=3, grass_grey=232.0, marking_grey=196.0, runway_grey=72.0)
+    image, state, labels = airport_frame("thesis-3", distance, camera, scene)
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    result = detect_runway(image, camera, roll, pitch)
+    assert result.found, result.reason
+    assert "moved out past its side stripe" in result.reason
+    near, edge = _errors(result, camera, labels)
+    assert edge < 1.0
+    assert result.corners_found[:2].all() and near.max() < 1.0, (near, result.reason)
+    # the rule off (no stripe counts as resolved): the edges stay on the paint's inner flank
+    inner = detect_runway(image, camera, roll, pitch, params=DetectorParams(staircase_min_px=1000.0))
+    assert _errors(inner, camera, labels)[1] > 3.0
