@@ -1133,13 +1133,19 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
     for name, other in (("left", "right"), ("right", "left")):
         fit = fits[name]
         ratios, width, sampled, outward = seen_on[name]
-        # the edge through the steps onto the ground where seen, elsewhere a stripe's width out:
-        # the steps place it where the fit found was held on part of the edge only (turned)
+        # the edge through where it meets the horizon (a stripe's width is nothing there: the
+        # edges still meet it where they did) and the steps onto the ground where seen,
+        # elsewhere a stripe's width out: the steps turn it where the fit found was held on
+        # part of the edge only
+        crossing = np.cross(fit.line.homogeneous(), ctx.horizon.parallel_h(0.0))
+        if abs(crossing[2]) < 1e-12:
+            return fits
+        crossing = crossing[:2] / crossing[2]
         outer = sampled + (np.where(np.isfinite(ratios), ratios, ratio) * width)[:, None] * outward
-        point = outer.mean(axis=0)
-        direction = np.linalg.svd(outer - point)[2][0]
+        direction = np.linalg.svd(outer - crossing)[2][0]
         if direction @ fit.line.direction < 0.0:
             direction = -direction
+        point = crossing + ((outer.mean(axis=0) - crossing) @ direction) * direction
         line = PixelLine(point=point, direction=direction)
         other_line = fits[other].line
         points = fit.points + (ratio * np.abs(other_line.distance(fit.points)))[:, None] * outward

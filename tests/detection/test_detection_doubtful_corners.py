@@ -32,15 +32,24 @@ def test_corners_on_the_inner_sides_of_side_stripes_lost_in_snow_are_withheld():
     """'variety 3' of the robustness study at 2048 px (snow, monochrome), 479 m before the
     threshold: the white side stripes merge with the snow, the edges found are their inner sides
     (2-5 px in), at confidence 0.30, and the near corners were reported 5.1 px off (tracked; 4.6 px
-    for the edges acquired on this frame alone). The runway is found and no corner is reported."""
-    from visland.detection import detect_runway
+    for the edges acquired on this frame alone). The runway is found and no corner is reported.
+
+    The stripes here are darker than the snow, steps of the edges' own sign 3 px out, so the
+    staircase rule (``staircase_*``) moves both edges past them (2 px in instead of 4.6); this
+    frame's withholding is checked with that rule off, and with it on nothing is reported wrong."""
+    from visland.detection import DetectorParams, detect_runway
     [(rgb, state, labels, _)], camera = study_frames({}, (0.0, 0.0), [224], size=2048, variety=3)
-    result = detect_runway(rgb, camera, float(state.roll_rad[0]), float(state.pitch_rad[0]))
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    result = detect_runway(rgb, camera, roll, pitch, params=DetectorParams(staircase_min_px=1000.0))
     errors = study_errors(result, camera, state, labels)
     assert result.found, result.reason
     assert "corners withheld: the edges they lie on have a confidence of" in result.reason, result.reason
     assert not result.corners_found.any()
     assert not errors["gross"], errors
+    moved = detect_runway(rgb, camera, roll, pitch)
+    assert not moved.corners_found.any(), moved.reason
+    if moved.found:
+        assert study_errors(moved, camera, state, labels)["edge_px"] < 2.5
 
 
 def test_the_next_search_window_covers_the_doubtful_corners():
