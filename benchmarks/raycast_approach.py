@@ -58,7 +58,8 @@ def scene_of(args):
         joining.append((x, int(side), angle, 260.0))
     return PaintedAirport(runway_length_m=args.runway[0], runway_width_m=args.runway[1], seed=args.seed,
                           joining_taxiways=tuple(joining), haze_range_m=args.haze_m, taxiway_grey=args.taxiway_grey,
-                          taxiway_offset_m=-(4 * args.runway[1] + 2.5))
+                          taxiway_offset_m=-(4 * args.runway[1] + 2.5), grass_grey=args.ground_grey,
+                          runway_grey=args.runway_grey, marking_grey=args.marking_grey)
 
 
 def _draw(job):
@@ -101,6 +102,11 @@ def main(argv=None) -> int:
     parser.add_argument("--taxiway-grey", type=float, default=84.0,
                         help="grey level of the joining taxiways (default 84: asphalt like the runway's 78)")
     parser.add_argument("--haze-m", type=float, default=6000.0, help="haze range of the ray caster (m)")
+    parser.add_argument("--ground-grey", type=float, default=105.0,
+                        help="grey level of the ground around the runway (default 105, grass; 232: snow)")
+    parser.add_argument("--runway-grey", type=float, default=78.0, help="grey level of the runway (default 78)")
+    parser.add_argument("--marking-grey", type=float, default=225.0,
+                        help="grey level of the markings (default 225; 196: worn paint, darker than snow)")
     parser.add_argument("--size", default="2048", help="N or WxH (default 2048)")
     parser.add_argument("--hfov", type=float, default=None, help="horizontal field of view, deg (default: SPEC 45 deg)")
     parser.add_argument("--distortion", default=None, help="k1,k2,p1,p2,k3 (OpenCV)")

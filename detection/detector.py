@@ -1091,9 +1091,20 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
     at fractions of the local width whose robust scatter is within ``staircase_max_scatter`` of
     their median on each edge, whose medians agree within ``staircase_agreement`` and are at most
     ``side_stripe_width_fraction`` (the fraction of profiles counted where a stripe that wide is
-    at least ``staircase_min_px`` wide, three profiles at least). Each edge then moves out by the two medians' mean times the local width:
-    a turn about the vanishing point (the width, and the shift, are zero there), so the edges
-    still meet on the horizon. Returns ``fits``, the two edges replaced when they moved.
+    at least ``staircase_min_px`` wide, three profiles at least). Both edges are looked across
+    over the depths either is supported over.
+
+    Each edge is then refitted through the point where it meets the horizon (a stripe's width,
+    and its shift, are nothing there, so the edges meet the horizon where they did) and the
+    steps onto the ground where its profiles see them, elsewhere the two medians' mean times the
+    local width out: where the edge found was held on part of its stretch only, turned, the steps
+    turn it back (the ray-cast snow airport at 150 m, 768 px: edges 4.3 and 5.5 px in, 0.1 and
+    0.3 px after). The fits' residuals, supports and contrasts are kept: the confidence is the
+    edges found's. Returns ``fits``, the two edges replaced when they moved.
+
+    A stripe narrower than ``staircase_min_px`` merges with the step onto it and is not seen:
+    there the edges stay a stripe's width in (the ray-cast snow airport at 250 m, 768 px: 4.3 px
+    in at the near corner, reported; 'variety 3' from 560 to 480 m at 2048 px: 2-3 px).
     """
     params = ctx.params
     # both edges looked across over the depths either is supported over (where one edge's
