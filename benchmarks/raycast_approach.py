@@ -124,6 +124,10 @@ def main(argv=None) -> int:
     parser.add_argument("--quiet", action="store_true", help="no per-frame lines")
     args = parser.parse_args(argv)
     args.runway = tuple(float(a) for a in args.runway.split(","))
+    for name in ("ground_grey", "runway_grey", "marking_grey", "taxiway_grey"):
+        value = getattr(args, name)
+        if not 0.0 <= value <= 255.0:
+            parser.error(f"--{name.replace('_', '-')} must be a grey level from 0 to 255, got {value:g}")
 
     from visland.camera import CameraModel
     from visland.contracts import MEASUREMENT_COLUMNS, write_csv
