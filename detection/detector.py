@@ -37,7 +37,8 @@ from visland.detection.pencil import FloatFrame
 from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of,
                                      net_step, refine_line, sample_profiles)
 from visland.detection.result import DetectionResult, not_found
-from visland.detection.threshold_marking import ground_begins, marked_at_start, threshold_marking
+from visland.detection.threshold_marking import (ground_begins, marked_at_start, starts_on_its_stripes,
+                                                 threshold_marking)
 from visland.detection.transverse import find_transverse_line, pavement_beyond_edges, surface_extent
 from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
                                          wider_strip_beside)
@@ -1385,6 +1386,12 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             notes.append(f"threshold withheld: its step continues beyond the runway's {' and '.join(beyond)} "
                          f"edge{'s' if len(beyond) > 1 else ''} (a pavement crossing or joining the runway there)")
             near = None
+    if (near is not None and not near.method.startswith("marking")
+            and starts_on_its_stripes(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
+                                      near.depth_px, min_step, params=params)):
+        notes.append("threshold withheld: placed where its stripes start, the pavement before them as light as "
+                     "the ground (where the runway begins is not seen)")
+        near = None
     threshold_marked = near is not None and (marked or near.method.startswith("marking") or marked_at_start(
         ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px, min_step,
         pavement_step=near.step if math.isfinite(near.step) else 0.0, params=params))

@@ -387,6 +387,49 @@ def marked_at_start(image, horizon: HorizonFrame, s0: float, left: PixelLine, ri
     return bool(np.any(np.all(quarters - plain >= excess, axis=1)))
 
 
+#: The shortest setback of threshold stripes from the threshold, runway widths: ICAO Annex 14 and
+#: the FAA both start them 6 m in, 0.1 widths of the widest runway (60 m).
+STRIPE_SETBACK_WIDTHS = 0.1
+
+
+def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
+                          d_threshold: float, min_step: float, params: DetectorParams | None = None) -> bool:
+    """Whether a threshold placed at depth ``d_threshold`` lies where its stripes start, the
+    pavement before them unseen (as light as the ground: concrete on sand in a grey frame).
+
+    Threshold stripes start 6 m past the threshold (:data:`STRIPE_SETBACK_WIDTHS` of the widest
+    runway), so the band just inside a true threshold is plain pavement. Where that band would
+    be 2 px deep or more, it is read across the runway (48 columns over ``marking_column_span``):
+    a threshold placed on the stripes' start has paint and pavement side by side there (the 80th
+    and 20th percentiles of the columns' levels at least ``min_step`` apart), and the pavement
+    between the stripes at the ground's level just before the line (within 30 % of the paint's
+    rise over the ground): the step found is the paint's, the runway begins before it.
+    """
+    params = params or DetectorParams()
+    across = _across_at(horizon, s0, left, right, d_threshold)
+    if across is None:
+        return False
+    line_left, line_right, width_k, k_centre = across
+    d_setback = float(depth_along(horizon.camera.fx, d_threshold, STRIPE_SETBACK_WIDTHS, width_k))
+    if not d_threshold - d_setback >= 2.0:
+        return False
+    band = np.arange(d_threshold - 0.5, d_setback + 0.25, -0.5)
+    ground = d_threshold + np.array([1.0, 1.5, 2.0])
+    fractions = np.linspace(*params.marking_column_span, 48)
+    _, _, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right,
+                                         np.concatenate([band, ground]), fractions, image.shape)
+    if not inside.all():
+        return False
+    values = remap_inside(image, grid[..., 0].astype(np.float32), grid[..., 1].astype(np.float32), inside,
+                          cv2.BORDER_CONSTANT, np.nan)
+    columns = np.nanmean(values[:len(band)], axis=0)
+    ground_level = float(np.nanmedian(values[len(band):]))
+    between, paint = np.nanpercentile(columns, [20.0, 80.0])
+    if not (paint - between >= min_step and paint > ground_level):
+        return False
+    return bool(abs(between - ground_level) <= 0.3 * (paint - ground_level))
+
+
 def _first_threshold_band(band: np.ndarray, is_bar: np.ndarray, depths: np.ndarray, fx: float, width_k: float,
                           params: DetectorParams, single_lines_from: float = math.inf) -> tuple[int, str, int] | None:
     """The first band of ``band`` that can be the threshold marking: ``(index of its first line,
