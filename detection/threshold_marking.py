@@ -390,6 +390,12 @@ def marked_at_start(image, horizon: HorizonFrame, s0: float, left: PixelLine, ri
 #: The shortest setback of threshold stripes from the threshold, runway widths: ICAO Annex 14 and
 #: the FAA both start them 6 m in, 0.1 widths of the widest runway (60 m).
 STRIPE_SETBACK_WIDTHS = 0.1
+#: Runway widths past a threshold line where its stripes lie whatever the runway: they start 6 m
+#: in (0.26 widths of a 23 m runway) and run 30 m (ICAO; 45 m FAA), 0.5 widths of a 60 m one.
+STRIPES_INSIDE_WIDTHS = (0.3, 0.5)
+#: Correlation across the runway's columns between the band before the stripes and the stripes
+#: at least this high: the band holds the same stripes.
+STRIPES_ALIKE = 0.7
 
 
 def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
@@ -401,9 +407,11 @@ def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLi
     runway), so the band just inside a true threshold is plain pavement. Where that band would
     be 2 px deep or more, it is read across the runway (48 columns over ``marking_column_span``):
     a threshold placed on the stripes' start has paint and pavement side by side there (the 80th
-    and 20th percentiles of the columns' levels at least ``min_step`` apart), and the pavement
-    between the stripes at the ground's level just before the line (within 30 % of the paint's
-    rise over the ground): the step found is the paint's, the runway begins before it.
+    and 20th percentiles of the columns' levels at least ``min_step`` apart), bright in the same
+    columns as the stripes :data:`STRIPES_INSIDE_WIDTHS` past the line (a correlation of
+    :data:`STRIPES_ALIKE` at least), and the pavement between the stripes at the ground's level
+    just before the line (within 30 % of the paint's rise over the ground): the step found is the
+    paint's, the runway begins before it.
     """
     params = params or DetectorParams()
     across = _across_at(horizon, s0, left, right, d_threshold)
@@ -415,17 +423,26 @@ def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLi
         return False
     band = np.arange(d_threshold - 0.5, d_setback + 0.25, -0.5)
     ground = d_threshold + np.array([1.0, 1.5, 2.0])
+    d_in, d_deep = (float(depth_along(horizon.camera.fx, d_threshold, w, width_k)) for w in STRIPES_INSIDE_WIDTHS)
+    stripes = np.arange(d_in, d_deep - 0.25, -0.5)
     fractions = np.linspace(*params.marking_column_span, 48)
     _, _, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right,
-                                         np.concatenate([band, ground]), fractions, image.shape)
-    if not inside.all():
+                                         np.concatenate([band, ground, stripes]), fractions, image.shape)
+    if len(stripes) < 2 or not inside.all():
         return False
     values = remap_inside(image, grid[..., 0].astype(np.float32), grid[..., 1].astype(np.float32), inside,
                           cv2.BORDER_CONSTANT, np.nan)
     columns = np.nanmean(values[:len(band)], axis=0)
-    ground_level = float(np.nanmedian(values[len(band):]))
+    ground_level = float(np.nanmedian(values[len(band):len(band) + len(ground)]))
+    deeper = np.nanmean(values[len(band) + len(ground):], axis=0)
     between, paint = np.nanpercentile(columns, [20.0, 80.0])
     if not (paint - between >= min_step and paint > ground_level):
+        return False
+    # the band's bright columns are the stripes' (the same columns as deeper in), not the
+    # pavement's own texture (concrete on dry grass at 160 m, 2048 px: a true threshold)
+    if not np.all(np.isfinite(columns)) or not np.all(np.isfinite(deeper)) or np.std(columns) == 0 or np.std(deeper) == 0:
+        return False
+    if not float(np.corrcoef(columns, deeper)[0, 1]) >= STRIPES_ALIKE:
         return False
     return bool(abs(between - ground_level) <= 0.3 * (paint - ground_level))
 
