@@ -440,7 +440,8 @@ def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLi
         return False
     # the band's bright columns are the stripes' (the same columns as deeper in), not the
     # pavement's own texture (concrete on dry grass at 160 m, 2048 px: a true threshold)
-    if not np.all(np.isfinite(columns)) or not np.all(np.isfinite(deeper)) or np.std(columns) == 0 or np.std(deeper) == 0:
+    if not (np.all(np.isfinite(columns)) and np.all(np.isfinite(deeper))
+            and np.std(columns) > 0 and np.std(deeper) > 0):
         return False
     if not float(np.corrcoef(columns, deeper)[0, 1]) >= STRIPES_ALIKE:
         return False
