@@ -35,7 +35,7 @@ from visland.detection.horizon import HorizonFrame, horizon_frame, widths_along
 from visland.detection.params import DetectorParams
 from visland.detection.pencil import FloatFrame
 from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of,
-                                     net_step, refine_line, sample_profiles)
+                                     net_step, parabola_peak, refine_line, sample_profiles)
 from visland.detection.result import DetectionResult, not_found
 from visland.detection.threshold_marking import (ground_begins, marked_at_start, starts_on_its_stripes,
                                                  threshold_marking)
@@ -1065,12 +1065,7 @@ def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, param
                          & (edge_slope[:, None] > 0.0), same, -np.inf)
     j = np.argmax(candidate, axis=1)
     found = np.isfinite(candidate[rows, j])
-    jc = np.clip(j, 1, len(offsets) - 2)
-    left, centre, right = same[rows, jc - 1], same[rows, jc], same[rows, jc + 1]
-    curvature = left - 2.0 * centre + right
-    with np.errstate(divide="ignore", invalid="ignore"):
-        delta = np.clip(np.where(curvature < 0.0, 0.5 * (left - right) / curvature, 0.0), -0.5, 0.5)
-    ratios = np.where(found, (offsets[jc] + delta * step) / width, np.nan)
+    ratios = np.where(found, (offsets[j] + parabola_peak(same, j) * step) / width, np.nan)
     return ratios, width, points, outward
 
 

@@ -26,7 +26,7 @@ from visland.detection.params import DetectorParams
 __all__ = ["PixelLine", "LineFit", "NoFit", "SLOPE_PER_STEP", "median_of", "percentile_of", "sample_profiles",
            "edge_offsets", "boundary_offsets", "BoundaryPoints", "HiddenStripe", "past_hidden_stripe", "transition_offsets",
            "stripe_offsets", "fit_line", "refine_line", "chroma_boundary", "chroma_of",
-           "remap_inside", "net_step"]
+           "remap_inside", "net_step", "parabola_peak"]
 
 _DERIVATIVE = np.array([-1.0, -2.0, 0.0, 2.0, 1.0]) / 8.0
 #: Peak slope of the 5-tap derivative across a step blurred by about a pixel, per unit of step
@@ -340,7 +340,7 @@ def _derivative(profiles: np.ndarray, step_px: float) -> np.ndarray:
     return out
 
 
-def _parabola_peak(values: np.ndarray, index: np.ndarray) -> np.ndarray:
+def parabola_peak(values: np.ndarray, index: np.ndarray) -> np.ndarray:
     """Sub-sample offset of the peak of a parabola through values[index-1 .. index+1] (rows)."""
     rows = np.arange(len(index))
     left = values[rows, np.clip(index - 1, 0, values.shape[1] - 1)]
@@ -387,7 +387,7 @@ def edge_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
         signed = np.where(window, signed, -np.inf)
     index = np.argmax(signed, axis=1)
     best = signed[np.arange(len(index)), index]
-    delta = _parabola_peak(np.where(np.isfinite(signed), signed, 0.0), index)
+    delta = parabola_peak(np.where(np.isfinite(signed), signed, 0.0), index)
     position = offsets[index] + delta * step
     valid = np.isfinite(best) & (best > 0) & (index > 1) & (index < signed.shape[1] - 2)
     return np.where(valid, position, np.nan), np.where(valid, best, 0.0)
@@ -836,8 +836,8 @@ def stripe_offsets(profiles: np.ndarray, offsets: np.ndarray, polarity: int,
     rows = np.arange(n)
     ok = np.isfinite(rise[rows, i_rise]) & np.isfinite(fall[rows, i_fall]) \
         & (rise[rows, i_rise] > 0) & (fall[rows, i_fall] > 0)
-    d_rise = _parabola_peak(g, i_rise)
-    d_fall = _parabola_peak(-g, i_fall)
+    d_rise = parabola_peak(g, i_rise)
+    d_fall = parabola_peak(-g, i_fall)
     position = offsets[0] + step * (0.5 * (i_rise + d_rise + i_fall + d_fall))
     # height: the peak above the mean of the profile's two ends beyond the stripe edges
     outer_left = np.clip(i_rise - 3, 0, m - 1)
