@@ -341,7 +341,20 @@ def _derivative(profiles: np.ndarray, step_px: float) -> np.ndarray:
 
 
 def parabola_peak(values: np.ndarray, index: np.ndarray) -> np.ndarray:
-    """Sub-sample offset of the peak of a parabola through values[index-1 .. index+1] (rows)."""
+    """Sub-sample offset of the peak of a parabola through ``values[index-1 .. index+1]``, per row.
+
+    Parameters
+    ----------
+    values : ndarray, shape (n, m)
+        Samples, one row per profile.
+    index : ndarray of int, shape (n,)
+        The peak's sample in each row.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Offset from ``index`` in samples, within +-0.5 (0 where the three are collinear).
+    """
     rows = np.arange(len(index))
     left = values[rows, np.clip(index - 1, 0, values.shape[1] - 1)]
     centre = values[rows, index]
