@@ -30,7 +30,7 @@ import cv2
 import numpy as np
 
 from visland.camera import CameraModel
-from visland.detection.candidates import candidate_lines, check_lines, hough_segments
+from visland.detection.candidates import banded_hough_segments, candidate_lines, check_lines, hough_segments
 from visland.detection.horizon import HorizonFrame, horizon_frame, widths_along
 from visland.detection.params import DetectorParams
 from visland.detection.pencil import FloatFrame
@@ -216,6 +216,20 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
                 why = f"{why} (smoothed against its pixel noise of {noise:.1f} grey levels: {why_smoothed})"
             else:
                 note = f"found on the frame smoothed against its pixel noise of {noise:.1f} grey levels"
+                result = replace(result, reason=f"{result.reason}; {note}" if result.reason else note,
+                                 notes=tuple(result.notes) + (note,))
+        elif noise <= params.low_contrast_max_noise and params.low_contrast_factor < 1.0:
+            # a clean frame of low contrast (haze, overcast, dusk): a runway's edges a few grey
+            # levels, under min_contrast but many times the noise. Only a second look: on a clear
+            # frame the grey-level thresholds keep the ground's texture out
+            faint = params.for_low_contrast()
+            result, why_faint = _search_frame(_Context(image, camera, horizon, faint, roll, pitch, start, colour),
+                                              previous, ground)
+            if result is None:
+                why = f"{why} (with the contrast thresholds of a low-contrast frame: {why_faint})"
+            else:
+                note = (f"found with the contrast thresholds of a low-contrast frame (pixel noise {noise:.1f} grey "
+                        f"levels, edges of {faint.min_contrast:g} grey levels accepted)")
                 result = replace(result, reason=f"{result.reason}; {note}" if result.reason else note,
                                  notes=tuple(result.notes) + (note,))
     except (ArithmeticError, np.linalg.LinAlgError, cv2.error) as error:
@@ -544,7 +558,9 @@ def _hypothesis_of(prediction: Prediction) -> RunwayHypothesis:
 def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
     """Candidates in ``roi``, the trapezoid model, then measurement of the best hypotheses."""
     params, horizon = ctx.params, ctx.horizon
-    segments = hough_segments(ctx.image, roi, max_side_px, params)
+    # acquisition (no prediction) also searches the distant ground's rows on their own
+    segments = (hough_segments(ctx.image, roi, max_side_px, params) if prediction is not None
+                else banded_hough_segments(ctx.image, roi, max_side_px, params))
     lines = check_lines(ctx.image, horizon, candidate_lines(segments, horizon, params), params)
     bottom_depth = _deepest_visible(horizon, ctx.camera.width, ctx.camera.height)
     hypotheses = runway_hypotheses(ctx.image, horizon, lines, params, prediction, bottom_depth_px=bottom_depth)

@@ -174,6 +174,14 @@ class DetectorParams(ParamsFile):
         working image, each way (their cost).
     check_min_span_px : float
         A candidate line's span is taken as at least this (pixels of depth) when it is extended.
+    hough_depth_bands : tuple of 2 float
+        Acquisition also looks for Hough segments in two bands of the ground's rows next to the
+        horizon, ``[0, b1]`` and ``[b1, b2]`` fractions of its height, each with its own Canny
+        thresholds (:func:`~visland.detection.candidates.banded_hough_segments`); a band of zero
+        height is not searched. None by default: on clear frames the bands' extra candidates
+        made a parallel taxiway the runway ('concrete, sand, mono': 198 gross frames out of 240);
+        the low-contrast second look (:meth:`for_low_contrast`) searches
+        ``low_contrast_hough_bands``.
     check_transition_halfspan_px, check_transition_side_px : float, tuple of 2 float
         A transition across a candidate line is centred on its gradient within the first of the
         strongest, its net step read between the second's distances either side
@@ -492,6 +500,17 @@ class DetectorParams(ParamsFile):
         (visland's clean frames 0.7-1.2, the ray-cast airport 2.0); white noise of deviation
         ``s`` comes out of a Gaussian of sigma 1 px at about ``s / 3.5``. Only a second look:
         smoothed, a side stripe blurs into the edge beside it (edges 0.2-0.5 px off).
+    low_contrast_max_noise, low_contrast_factor : float
+        A frame in which the runway was not found and whose pixel noise is at most
+        ``low_contrast_max_noise`` grey levels is searched again with its grey-level thresholds
+        (``min_contrast``, ``surface_min_contrast``) times ``low_contrast_factor`` (1: never):
+        haze, overcast and dusk take a runway's edges to a few grey levels, still many times
+        such a frame's noise. Only a second look: on a clear frame the thresholds keep the
+        ground's texture out.
+    low_contrast_hough_bands : tuple of 2 float
+        The ``hough_depth_bands`` of that second look: haze and dusk take a distant runway's
+        contrast below the near ground's texture, whose gradients set the whole frame's Canny
+        thresholds ('overcast, 5 km' at 1.97 km, 2048 px: no candidate line on the runway).
     roi_margin_px : float
         Margin added around the predicted runway in tracking mode.
     roi_margin_fraction : float
@@ -842,6 +861,7 @@ class DetectorParams(ParamsFile):
     duplicate_gap_px: float = 1.0
     canny_quantile_step: int = 2
     check_min_span_px: float = 4.0
+    hough_depth_bands: tuple = (0.0, 0.0)
     check_transition_halfspan_px: float = 2.0
     check_transition_side_px: tuple = (2.5, 5.0)
     check_fit_iterations: int = 5
@@ -984,6 +1004,9 @@ class DetectorParams(ParamsFile):
     deblock_min_grid_step: float = 2.15
     denoise_min_noise: float = 2.5
     denoise_sigma_px: float = 1.0
+    low_contrast_max_noise: float = 1.5
+    low_contrast_factor: float = 0.5
+    low_contrast_hough_bands: tuple = (0.125, 0.33)
     # --- tracking, the measurement and its confidence (detector)
     roi_margin_px: float = 40.0
     roi_margin_fraction: float = 0.15
@@ -1114,6 +1137,7 @@ class DetectorParams(ParamsFile):
         "check_max_gap_fraction": (0.0, 1.0, "open"), "crossing_min_sigma_px": (0.0, 100.0),
         "pencil_fit_min_sigma_px": (0.01, 100.0), "duplicate_gap_px": (0.0, 100.0),
         "canny_quantile_step": (1, 16, "int"), "check_min_span_px": (0.5, 1000.0),
+        "hough_depth_bands": (0.0, 1.0),
         "check_transition_halfspan_px": (0.5, 100.0), "check_transition_side_px": (0.5, 100.0),
         "check_fit_iterations": (1, 50, "int"), "check_fit_min_inliers": (3, 1000, "int"),
         "check_line_min_sigma_px": (0.01, 100.0), "fit_weight_cap_percentile": (1.0, 100.0),
@@ -1177,6 +1201,8 @@ class DetectorParams(ParamsFile):
         "block_sample_rows": (1, 4096, "int"), "block_grid_px": (2, 64, "int"),
         "block_grid_min_ratio": (1.0, 100.0), "deblock_min_grid_step": (0.0, 255.0), "deblock_sigma_px": (0.0, 10.0),
         "denoise_min_noise": (0.0, 255.0), "denoise_sigma_px": (0.0, 10.0),
+        "low_contrast_max_noise": (0.0, 255.0), "low_contrast_factor": (0.0, 1.0, "open"),
+        "low_contrast_hough_bands": (0.0, 1.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
         "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
@@ -1278,6 +1304,21 @@ class DetectorParams(ParamsFile):
             return self
         return replace(self, confidence_residual_px=max(self.confidence_residual_px, staircase_px),
                        max_line_residual_px=max(self.max_line_residual_px, staircase_px))
+
+    def for_low_contrast(self) -> "DetectorParams":
+        """The same detector with its grey-level thresholds (``min_contrast``,
+        ``surface_min_contrast``) times ``low_contrast_factor`` and the Hough bands
+        ``low_contrast_hough_bands``, for a frame of low contrast and low noise
+        (:attr:`low_contrast_max_noise`); made once per parameter set."""
+        return self._low_contrast_params
+
+    @cached_property
+    def _low_contrast_params(self) -> "DetectorParams":
+        if self.low_contrast_factor == 1.0:
+            return self
+        return replace(self, min_contrast=self.min_contrast * self.low_contrast_factor,
+                       surface_min_contrast=self.surface_min_contrast * self.low_contrast_factor,
+                       hough_depth_bands=self.low_contrast_hough_bands)
 
     def scaled_to(self, frame) -> "DetectorParams":
         """The same detector for another frame: lengths in pixels scale (module docstring), counts,
