@@ -225,6 +225,11 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
             faint = params.for_low_contrast()
             result, why_faint = _search_frame(_Context(image, camera, horizon, faint, roll, pitch, start, colour),
                                               previous, ground)
+            if result is not None and not result.shows_runway_marking:
+                # a faint strip is the runway on its threshold marking only: in haze a parallel
+                # taxiway or road is as faint, and as straight (the ray-cast airport at 2.5-3 km
+                # in a haze of 1.5 km: the taxiway's edges found, 72-88 px off, unmarked)
+                result, why_faint = None, "a strip found without a threshold marking, which a faint runway needs"
             if result is None:
                 why = f"{why} (with the contrast thresholds of a low-contrast frame: {why_faint})"
             else:

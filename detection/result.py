@@ -126,6 +126,15 @@ class DetectionResult:
         """Which of the three lines were measured."""
         return {name: bool(np.all(np.isfinite(self.lines[name]))) for name in LINE_NAMES}
 
+    @property
+    def shows_runway_marking(self) -> bool:
+        """Whether this saw a runway's own marking: the threshold's (``threshold_marked``, which
+        includes a threshold placed on a marking inside the pavement), or a threshold marking
+        inside the pavement it could not place (a displaced threshold's bar far out). Not a
+        centre line: taxiways carry one too (the robustness study's overcast taxiway, its centre
+        line found from 1.0 km)."""
+        return self.threshold_marked or math.isfinite(self.pavement_marking_widths)
+
     def to_measurement_row(self, frame: int | None = None, t_s: float | None = None) -> dict:
         """One row of ``measurements.csv`` (:data:`visland.contracts.MEASUREMENT_COLUMNS`).
 

@@ -240,7 +240,8 @@ class DetectionSequence:
                             pitch_rad: float, dt: float, t_s: float) -> tuple[DetectionResult, DetectionResult | None]:
         """While the strip followed is not confirmed as the runway (:func:`_confirmed`), the whole
         frame is searched afresh each frame: another strip found there with a threshold marking
-        (:func:`_shows_runway_marking`) in this frame and the one before is the runway, and
+        (:attr:`~visland.detection.result.DetectionResult.shows_runway_marking`) in this frame and
+        the one before is the runway, and
         replaces the track (``(found, None)``: the frame starts a new one); the same strip found
         so confirms the track. On the
         robustness study's overcast frames (2048 px) the parallel taxiway acquired in fog at
@@ -252,7 +253,7 @@ class DetectionSequence:
             return result, prior
         fresh = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params)
         candidate, self.replacement = self.replacement, None
-        if not (fresh.found and _shows_runway_marking(fresh)):
+        if not (fresh.found and fresh.shows_runway_marking):
             return result, prior
         if self.good_geometry is None or not _identity_mismatch(fresh, self.camera, self.good_geometry[0], math.nan,
                                                                 dt, self.params):
@@ -571,15 +572,6 @@ def _ground_geometry(result: DetectionResult, camera: CameraModel):
     return 0.5 * (slopes[0] + slopes[1]), abs(slopes[1] - slopes[0])
 
 
-def _shows_runway_marking(result: DetectionResult) -> bool:
-    """Whether ``result`` saw a runway's own marking: the threshold's (``threshold_marked``, which
-    includes a threshold placed on a marking inside the pavement), or a threshold marking inside
-    the pavement it could not place (a displaced threshold's bar far out). Not a centre line:
-    taxiways carry one too (the robustness study's overcast taxiway, its centre line found from
-    1.0 km)."""
-    return result.threshold_marked or math.isfinite(result.pavement_marking_widths)
-
-
 def _lateral_offset(result: DetectionResult, camera: CameraModel) -> tuple[float, float] | None:
     """``(|Y| / h, |Y| / W)``: how far to the side of the aircraft the strip's centre line lies,
     in camera heights and in the strip's own widths (:func:`_ground_geometry`); None if not
@@ -600,7 +592,7 @@ def _confirmed(result: DetectionResult, camera: CameraModel, params: DetectorPar
     study's overcast frames (2048 px) the runway's edges were lost in the fog and a parallel taxiway
     1.33 heights out was acquired at 2.4 km, unmarked. A strip whose place cannot be measured (no
     horizon) is not held back."""
-    if _shows_runway_marking(result):
+    if result.shows_runway_marking:
         return True
     offset = _lateral_offset(result, camera)
     return (offset is None or offset[0] <= params.unconfirmed_max_lateral_heights

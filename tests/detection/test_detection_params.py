@@ -115,7 +115,19 @@ def test_a_non_square_camera_scales_lengths_by_its_side_and_angles_by_its_focal_
 
 
 @pytest.mark.parametrize("field, value", [("pair_outside_band", (0.4, 0.12)), ("strip_side_band", (0.1,)),
-                                          ("centre_stripe_sides", "wide")])
+                                          ("centre_stripe_sides", "wide"), ("hough_depth_bands", (0.3, 0.1)),
+                                          ("low_contrast_hough_bands", (0.1, 1.5))])
 def test_band_tuples_are_checked(field, value):
     with pytest.raises(ValueError, match=field):
         DetectorParams(**{field: value})
+
+
+def test_the_low_contrast_look_scales_the_grey_level_thresholds_and_adds_bands():
+    params = DetectorParams(min_contrast=8.0, surface_min_contrast=2.0, low_contrast_factor=0.25)
+    faint = params.for_low_contrast()
+    assert (faint.min_contrast, faint.surface_min_contrast) == (2.0, 0.5)
+    assert faint.hough_depth_bands == params.low_contrast_hough_bands != params.hough_depth_bands
+    assert faint.refine_samples == params.refine_samples
+    assert params.for_low_contrast() is faint                     # made once
+    never = DetectorParams(low_contrast_factor=1.0)
+    assert never.for_low_contrast() is never                      # 1: no second look

@@ -57,6 +57,44 @@ def test_grey_level_threshold_with_haze(distance):
     assert near.max() < 1.2, near
 
 
+def _attitude(state):
+    return float(state.roll_rad[0]), float(state.pitch_rad[0])
+
+
+@pytest.mark.slow
+def test_a_runway_in_thick_haze_is_found_on_a_second_look():
+    """Haze of 1.5 km at 1.8 km out, a clean sensor: the runway's edges a few grey levels, under ``min_contrast``
+    and under the Canny thresholds the near ground sets; the low-contrast second look (halved
+    thresholds, Hough bands near the horizon) finds it, corners exact against ray-cast truth."""
+    camera = CameraModel.default(1024)
+    image, state, labels = airport_frame("thesis-3", 1800.0, camera, PaintedAirport(seed=5, haze_range_m=1500.0),
+                                         noise_grey=0.8)
+    first_look_only = detect_runway(image, camera, *_attitude(state), params=DetectorParams(low_contrast_factor=1.0))
+    assert not first_look_only.found, "the frame no longer needs the second look: make the haze thicker"
+    result = detect_runway(image, camera, *_attitude(state))
+    assert result.found and "low-contrast frame" in result.reason, result.reason
+    near, edge = _errors(result, camera, labels)
+    assert edge < 1.0
+    assert result.corners_found[:2].all() and near.max() < 0.6, (near, result.reason)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("distance", [3000.0, 2500.0])
+def test_a_faint_strip_without_threshold_marking_is_not_reported(distance):
+    """The same haze further out: with the halved thresholds the parallel taxiway (185 m beside
+    the runway) holds together as a strip, edges 72-88 px from the runway's; unmarked, it is not
+    reported. Whatever is reported lies on the runway."""
+    camera = CameraModel.default(1024)
+    image, state, labels = airport_frame("thesis-3", distance, camera, PaintedAirport(seed=5, haze_range_m=1500.0),
+                                         noise_grey=0.8)
+    result = detect_runway(image, camera, *_attitude(state))
+    if result.found:
+        near, edge = _errors(result, camera, labels)
+        assert edge < 1.5, (edge, result.reason)
+    else:
+        assert "low-contrast frame" in result.reason, result.reason
+
+
 @pytest.mark.slow
 def test_a_taxiway_joining_near_the_threshold_never_becomes_the_threshold():
     """Taxiways join both sides 150-350 m past the threshold, one of them oblique, paved like the

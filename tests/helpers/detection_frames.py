@@ -87,10 +87,11 @@ def colour_frame(name: str, distance_m: float, size: int = SIZE, seed: int = 1):
 
 @functools.lru_cache(maxsize=None)
 def airport_frame(name: str, distance_m: float, camera: CameraModel, scene: PaintedAirport, frame_offset: int = 0,
-                  fps: float = 25.0, runway=None, seed: int = 1):
+                  fps: float = 25.0, runway=None, seed: int = 1, noise_grey: float = 2.0):
     """``(image, state, labels)`` of a ray-cast frame of any painted ``scene`` seen by any
     ``camera`` (non-square, distorting lens: labels stay in the pinhole image); ``runway``
-    overrides the scenario's (its size must match the scene's)."""
+    overrides the scenario's (its size must match the scene's); ``noise_grey`` is the sensor's
+    pixel noise (grey levels, before its blur)."""
     from dataclasses import replace
     scenario = get_scenario(name)
     if runway is not None:
@@ -100,6 +101,6 @@ def airport_frame(name: str, distance_m: float, camera: CameraModel, scene: Pain
     state = tr.at(np.array([tr.t_s[i] + frame_offset / fps]))
     R = batch_R_camera_from_runway(state.roll_rad, state.pitch_rad, state.dpsi_rad, camera.mount_rpy_rad)
     image = draw_frame(scene, camera, state.p_runway_m[0], R[0], supersample=2, blur_sigma_px=0.5,
-                       rng=np.random.default_rng(seed + frame_offset))
+                       noise_grey=noise_grey, rng=np.random.default_rng(seed + frame_offset))
     labels = ideal_features(state, scenario.runway, camera.without_distortion())
     return image, state, labels
