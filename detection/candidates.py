@@ -34,7 +34,8 @@ from visland.detection.refine import (MAD_TO_SIGMA, SLOPE_PER_STEP, TUKEY_C, med
 #: sqrt(pi / 2): Gaussian residuals' mean absolute value times this is their standard deviation
 #: (applied to the median absolute residual, its robust stand-in).
 MEDIAN_ABS_TO_SIGMA = 1.2533
-__all__ = ["Segments", "hough_segments", "banded_hough_segments", "CandidateLines", "candidate_lines", "check_lines", "pencil_normal_uv"]
+__all__ = ["Segments", "hough_segments", "banded_hough_segments", "CandidateLines", "candidate_lines", "check_lines",
+           "pencil_normal_uv"]
 
 
 @dataclass(frozen=True)

@@ -201,9 +201,10 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     context = _Context(image, camera, horizon, params, roll, pitch, start, colour)
     try:
         result, why = _search_frame(context, previous, ground)
+        second_looks = params.denoise_sigma_px > 0 or params.low_contrast_factor < 1.0
         noise = pixel_noise(image, ground, params.block_sample_rows) \
-            if result is None and not coarsely_compressed and params.denoise_sigma_px > 0 else math.nan
-        if noise >= params.denoise_min_noise:
+            if result is None and not coarsely_compressed and second_looks else math.nan
+        if noise >= params.denoise_min_noise and params.denoise_sigma_px > 0:
             # a noisy sensor's frame: the detector's contrast and support thresholds hold for a
             # pixel noise of 1-2 grey levels; smoothed, a noise of 3.5 falls to about that. Only
             # a second look: the smoothing blurs a side stripe into the edge beside it (edges
@@ -563,7 +564,8 @@ def _hypothesis_of(prediction: Prediction) -> RunwayHypothesis:
 def _search(ctx: _Context, roi, max_side_px: int, prediction, mode: str):
     """Candidates in ``roi``, the trapezoid model, then measurement of the best hypotheses."""
     params, horizon = ctx.params, ctx.horizon
-    # acquisition (no prediction) also searches the distant ground's rows on their own
+    # acquisition (no prediction) also searches the distant ground's rows on their own where
+    # the parameters name bands of them (the low-contrast look's)
     segments = (hough_segments(ctx.image, roi, max_side_px, params) if prediction is not None
                 else banded_hough_segments(ctx.image, roi, max_side_px, params))
     lines = check_lines(ctx.image, horizon, candidate_lines(segments, horizon, params), params)

@@ -1309,15 +1309,20 @@ class DetectorParams(ParamsFile):
         """The same detector with its grey-level thresholds (``min_contrast``,
         ``surface_min_contrast``) times ``low_contrast_factor`` and the Hough bands
         ``low_contrast_hough_bands``, for a frame of low contrast and low noise
-        (:attr:`low_contrast_max_noise`); made once per parameter set."""
+        (:attr:`low_contrast_max_noise`); the confidence's contrast scale
+        (``confidence_contrast_factor`` times ``min_contrast``) unchanged. Made once per
+        parameter set."""
         return self._low_contrast_params
 
     @cached_property
     def _low_contrast_params(self) -> "DetectorParams":
         if self.low_contrast_factor == 1.0:
             return self
+        # (the confidence still weighs an edge's contrast against the usual threshold: a faint
+        # edge found is a doubtful one, its corners withheld sooner)
         return replace(self, min_contrast=self.min_contrast * self.low_contrast_factor,
                        surface_min_contrast=self.surface_min_contrast * self.low_contrast_factor,
+                       confidence_contrast_factor=self.confidence_contrast_factor / self.low_contrast_factor,
                        hough_depth_bands=self.low_contrast_hough_bands)
 
     def scaled_to(self, frame) -> "DetectorParams":

@@ -128,6 +128,8 @@ def test_the_low_contrast_look_scales_the_grey_level_thresholds_and_adds_bands()
     assert (faint.min_contrast, faint.surface_min_contrast) == (2.0, 0.5)
     assert faint.hough_depth_bands == params.low_contrast_hough_bands != params.hough_depth_bands
     assert faint.refine_samples == params.refine_samples
+    # the confidence weighs a faint edge against the usual contrast scale
+    assert faint.confidence_contrast_factor * faint.min_contrast == params.confidence_contrast_factor * params.min_contrast
     assert params.for_low_contrast() is faint                     # made once
     never = DetectorParams(low_contrast_factor=1.0)
     assert never.for_low_contrast() is never                      # 1: no second look

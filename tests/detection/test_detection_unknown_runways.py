@@ -63,9 +63,9 @@ def _attitude(state):
 
 @pytest.mark.slow
 def test_a_runway_in_thick_haze_is_found_on_a_second_look():
-    """Haze of 1.5 km at 1.8 km out, a clean sensor: the runway's edges a few grey levels, under ``min_contrast``
-    and under the Canny thresholds the near ground sets; the low-contrast second look (halved
-    thresholds, Hough bands near the horizon) finds it, corners exact against ray-cast truth."""
+    """Haze of 1.5 km at 1.8 km out, a clean sensor: the runway's edges a few grey levels, under
+    ``min_contrast`` and under the Canny thresholds the near ground sets; the low-contrast second
+    look (halved thresholds, Hough bands near the horizon) finds it, exact against ray-cast truth."""
     camera = CameraModel.default(1024)
     image, state, labels = airport_frame("thesis-3", 1800.0, camera, PaintedAirport(seed=5, haze_range_m=1500.0),
                                          noise_grey=0.8)
@@ -75,7 +75,11 @@ def test_a_runway_in_thick_haze_is_found_on_a_second_look():
     assert result.found and "low-contrast frame" in result.reason, result.reason
     near, edge = _errors(result, camera, labels)
     assert edge < 1.0
-    assert result.corners_found[:2].all() and near.max() < 0.6, (near, result.reason)
+    # faint edges weigh little in the confidence (0.38 here): the corners, 0.34 px right, withheld
+    assert "corners withheld" in result.reason and not result.corners_found[:2].any(), result.reason
+    corners_anyway = detect_runway(image, camera, *_attitude(state), params=DetectorParams(corner_min_confidence=0.0))
+    assert corners_anyway.corners_found[:2].all()
+    assert _errors(corners_anyway, camera, labels)[0].max() < 0.6
 
 
 @pytest.mark.slow
@@ -144,3 +148,4 @@ def test_side_stripes_a_little_darker_than_the_snow_beyond_them(distance):
     # the rule off (no stripe counts as resolved): the edges stay on the paint's inner flank
     inner = detect_runway(image, camera, roll, pitch, params=DetectorParams(staircase_min_px=1000.0))
     assert _errors(inner, camera, labels)[1] > 3.0
+
