@@ -129,7 +129,24 @@ def banded_hough_segments(image: np.ndarray, roi: tuple, max_side_px: int, param
     fields step by tens. Among the distant ground's rows alone, the runway's edges are among the
     strongest. On the robustness study's 'overcast, 5 km' frame at 1.97 km (2048 px) the whole
     frame's candidates held no line of the runway; the first band's held both its edges.
-    ``scale`` is the coarsest of the searches' (the end points' uncertainty).
+
+    Parameters
+    ----------
+    image : ndarray (H, W) uint8
+    roi : (u0, v0, u1, v1)
+        Integer pixel bounds, end exclusive; its top rows are the ones nearest the horizon.
+    max_side_px : int
+        Working resolution of each search (:func:`hough_segments`).
+    params : DetectorParams
+        ``hough_depth_bands`` (a band of zero height, or under 8 rows, is not searched) and the
+        Canny and Hough parameters.
+
+    Returns
+    -------
+    Segments
+        All the searches' segments; ``scale`` the coarsest of theirs (the end points'
+        uncertainty), ``roi`` and ``edge_fraction`` those of the whole crop. The whole crop's
+        own :class:`Segments` when no band is searched.
     """
     segments = hough_segments(image, roi, max_side_px, params)
     u0, v0, u1, v1 = (int(a) for a in roi)
