@@ -211,33 +211,19 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
             # 0.2-0.5 px off where the frame as it came gives 0.05), so what is found without it
             # is measured without it
             smooth_image, smooth_colour = _blurred(image, colour, params.denoise_sigma_px)
+            smoothed = f"smoothed against its pixel noise of {noise:.1f} grey levels"
             smooth = _Context(smooth_image, camera, horizon, params, roll, pitch, start, smooth_colour)
-            result, why_smoothed = _search_frame(smooth, previous, ground)
-            if result is None:
-                why = f"{why} (smoothed against its pixel noise of {noise:.1f} grey levels: {why_smoothed})"
-            else:
-                note = f"found on the frame smoothed against its pixel noise of {noise:.1f} grey levels"
-                result = replace(result, reason=f"{result.reason}; {note}" if result.reason else note,
-                                 notes=tuple(result.notes) + (note,))
+            result, why = _look_again(smooth, previous, ground, why, smoothed, f"found on the frame {smoothed}")
         elif noise <= params.low_contrast_max_noise and params.low_contrast_factor < 1.0:
             # a clean frame of low contrast (haze, overcast, dusk): a runway's edges a few grey
             # levels, under min_contrast but many times the noise. Only a second look: on a clear
             # frame the grey-level thresholds keep the ground's texture out
             faint = params.for_low_contrast()
-            result, why_faint = _search_frame(_Context(image, camera, horizon, faint, roll, pitch, start, colour),
-                                              previous, ground)
-            if result is not None and not result.shows_runway_marking:
-                # a faint strip is the runway on its threshold marking only: in haze a parallel
-                # taxiway or road is as faint, and as straight (the ray-cast airport at 2.5-3 km
-                # in a haze of 1.5 km: the taxiway's edges found, 72-88 px off, unmarked)
-                result, why_faint = None, "a strip found without a threshold marking, which a faint runway needs"
-            if result is None:
-                why = f"{why} (with the contrast thresholds of a low-contrast frame: {why_faint})"
-            else:
-                note = (f"found with the contrast thresholds of a low-contrast frame (pixel noise {noise:.1f} grey "
-                        f"levels, edges of {faint.min_contrast:g} grey levels accepted)")
-                result = replace(result, reason=f"{result.reason}; {note}" if result.reason else note,
-                                 notes=tuple(result.notes) + (note,))
+            faintly = "with the contrast thresholds of a low-contrast frame"
+            result, why = _look_again(_Context(image, camera, horizon, faint, roll, pitch, start, colour),
+                                      previous, ground, why, faintly,
+                                      f"found {faintly} (pixel noise {noise:.1f} grey levels, edges of "
+                                      f"{faint.min_contrast:g} grey levels accepted)", needs_marking=True)
     except (ArithmeticError, np.linalg.LinAlgError, cv2.error) as error:
         # a degenerate configuration the geometry cannot handle (e.g. lines meeting at
         # infinity) is a frame without a detection, never an exception for the caller
@@ -245,6 +231,24 @@ def detect_in_scene_frame(image, camera: CameraModel, roll_rad: float, pitch_rad
     if result is None:
         return fail(why)
     return _withhold_hidden_corners(result, camera)
+
+
+def _look_again(context: "_Context", previous: DetectionResult | None, ground, why: str, how: str, note: str,
+                needs_marking: bool = False) -> tuple[DetectionResult | None, str]:
+    """A second search of a frame the first did not find the runway in, on ``context`` (the
+    frame smoothed, or lower thresholds): ``(result, why)``, the result saying ``note``, or None
+    and ``why`` followed by what the second look met (``how``: the way it looked).
+
+    ``needs_marking``: a strip found without its threshold marking is not the runway (in haze a
+    parallel taxiway or road is as faint as the runway, and as straight: the ray-cast airport at
+    2.5-3 km in a haze of 1.5 km, the taxiway's edges found 72-88 px off, unmarked).
+    """
+    result, why_again = _search_frame(context, previous, ground)
+    if result is not None and needs_marking and not result.shows_runway_marking:
+        result, why_again = None, "a strip found without a threshold marking, which a faint runway needs"
+    if result is None:
+        return None, f"{why} ({how}: {why_again})"
+    return result.with_note(note), why
 
 
 #: How far above the ground's margin (``params.ground_margin_px`` above the horizon) the grey

@@ -9,7 +9,7 @@ the runway-end corners); "left" and "right" are as seen by a pilot landing.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -134,6 +134,10 @@ class DetectionResult:
         centre line: taxiways carry one too (the robustness study's overcast taxiway, its centre
         line found from 1.0 km)."""
         return self.threshold_marked or math.isfinite(self.pavement_marking_widths)
+
+    def with_note(self, note: str) -> "DetectionResult":
+        """This result saying ``note`` too, after its ``reason`` and ``notes``."""
+        return replace(self, reason="; ".join(filter(None, [self.reason, note])), notes=tuple(self.notes) + (note,))
 
     def to_measurement_row(self, frame: int | None = None, t_s: float | None = None) -> dict:
         """One row of ``measurements.csv`` (:data:`visland.contracts.MEASUREMENT_COLUMNS`).

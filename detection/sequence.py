@@ -547,8 +547,8 @@ def _without_threshold(result: DetectionResult, note: str) -> DetectionResult:
     corners[:2] = np.nan
     found = result.corners_found.copy()
     found[:2] = False
-    return replace(result, corners_uv=corners, corners_found=found, threshold_line=(math.nan, math.nan),
-                   reason="; ".join(filter(None, [result.reason, note])), notes=result.notes + (note,))
+    return replace(result, corners_uv=corners, corners_found=found,
+                   threshold_line=(math.nan, math.nan)).with_note(note)
 
 
 def _ground_geometry(result: DetectionResult, camera: CameraModel):

@@ -148,4 +148,3 @@ def test_side_stripes_a_little_darker_than_the_snow_beyond_them(distance):
     # the rule off (no stripe counts as resolved): the edges stay on the paint's inner flank
     inner = detect_runway(image, camera, roll, pitch, params=DetectorParams(staircase_min_px=1000.0))
     assert _errors(inner, camera, labels)[1] > 3.0
-
