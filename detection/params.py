@@ -457,6 +457,13 @@ class DetectorParams(ParamsFile):
     staircase_min_px : float
         ... the profiles counted where the stripe is at least this wide (pixels of the frame:
         narrower, it merges with the step onto it), both edges are moved out past their stripes.
+    staircase_near_min_profiles, staircase_near_fraction, staircase_near_scatter, staircase_far_max_fraction : int, float, float, float
+        Or seen the way a stripe resolved on the edges' near part only is: of the nearer half
+        of those profiles, at least ``staircase_near_min_profiles`` and ``staircase_near_fraction``
+        see the second step within ``staircase_near_scatter`` of the median fraction (as regular
+        as paint), of the farther half at most ``staircase_far_max_fraction`` see one at all
+        (there the stripe merges with the step onto it; texture beyond an edge shows steps all
+        along it).
     net_step_outside_px, net_step_inside_px : tuple of 2 float
         A boundary's net grey-level change: mean between the first's distances outside it minus
         the mean between the second's distances inside the border stripe's reach (pixels).
@@ -992,6 +999,10 @@ class DetectorParams(ParamsFile):
     staircase_max_scatter: float = 0.2
     staircase_agreement: float = 0.3
     staircase_min_px: float = 2.5
+    staircase_near_min_profiles: int = 4
+    staircase_near_fraction: float = 0.5
+    staircase_near_scatter: float = 0.1
+    staircase_far_max_fraction: float = 0.25
     net_step_outside_px: tuple = (1.0, 3.0)
     net_step_inside_px: tuple = (0.5, 3.0)
     min_edge_support: float = 0.45
@@ -1196,6 +1207,8 @@ class DetectorParams(ParamsFile):
         "boundary_stripe_shift_scale_px": (0.01, 100.0), "hidden_stripe_min_fraction": (0.0, 1.0),
         "hidden_stripe_min_px": (0.0, 100.0), "hidden_stripe_tolerance": (0.0, 1.0),
         "hidden_stripe_max_scatter": (0.0, 10.0), "staircase_min_fraction": (0.0, 1.0), "staircase_step_ratio": (0.0, 10.0),
+        "staircase_near_min_profiles": (3, 1000, "int"), "staircase_near_fraction": (0.0, 1.0),
+        "staircase_near_scatter": (0.0, 10.0), "staircase_far_max_fraction": (0.0, 1.0),
         "staircase_max_scatter": (0.0, 10.0), "staircase_agreement": (0.0, 10.0), "staircase_min_px": (0.0, 1000.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),
         "min_edge_support": (0.0, 1.0, "open"), "max_line_residual_px": (0.01, 100.0), "min_contrast": (0.0, 255.0),
         "block_sample_rows": (1, 4096, "int"), "block_grid_px": (2, 64, "int"),
