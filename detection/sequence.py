@@ -552,24 +552,38 @@ def _without_threshold(result: DetectionResult, note: str) -> DetectionResult:
 
 
 def _ground_geometry(result: DetectionResult, camera: CameraModel):
-    """``(k_centre, width_ratio)``: the runway's centre line slope and its edges' slope difference
+    """``(k_centre, width_ratio)``: the runway's centre line slope and its width over the depth
     in the horizon frame (``s = s0 + k d``, :mod:`visland.detection.horizon`). For a ground line
     at lateral distance ``Y`` from the camera at height ``h``, ``k = Y / h`` (up to the heading
     deviation's cosine), so these are the runway's lateral offset and width over the height:
-    they change slowly over an approach whatever the attitude. None if not measurable."""
+    they change slowly over an approach whatever the attitude. None if not measurable.
+
+    The two edges meet the horizon at one vanishing point, taken as the mean of their own
+    crossings ``s0``; the width is read about it where both edges are measured (the middle of
+    their common depths): ``|k_r - k_l + (s0_r - s0_l) / d_mid|``. The slopes' difference alone
+    extrapolates two short edges to the horizon, where their crossings scatter by pixels: on the
+    ray-cast airport at 1280 x 720 (62 deg lens) from 3.8 to 3.0 km, 12-16 px wide, it read
+    0.14 to 0.30 for a true 0.18 to 0.22 (this reading: 0.175 to 0.214), and the runway was
+    refused as another object for 8 s.
+    """
     horizon = horizon_frame(camera, result.roll_rad, result.pitch_rad)
     if horizon is None:
         return None
-    slopes = []
+    pencils = []
     for name in ("left", "right"):
         segment = np.asarray(result.segments_uv.get(name, np.full((2, 2), np.nan)), float)
         if not np.all(np.isfinite(segment)):
             return None
-        _, k = horizon.pencil_from_points(segment[0], segment[1])
-        if not math.isfinite(float(k)):
+        s0, k = horizon.pencil_from_points(segment[0], segment[1])
+        depths = horizon.to_sd(segment)[:, 1]
+        if not (math.isfinite(float(s0)) and math.isfinite(float(k))):
             return None
-        slopes.append(float(k))
-    return 0.5 * (slopes[0] + slopes[1]), abs(slopes[1] - slopes[0])
+        pencils.append((float(s0), float(k), float(depths.min()), float(depths.max())))
+    (s0_left, k_left, far_left, near_left), (s0_right, k_right, far_right, near_right) = pencils
+    d_mid = 0.5 * (max(far_left, far_right) + min(near_left, near_right))
+    if not d_mid > 1e-9:
+        return None
+    return 0.5 * (k_left + k_right), abs(k_right - k_left + (s0_right - s0_left) / d_mid)
 
 
 def _lateral_offset(result: DetectionResult, camera: CameraModel) -> tuple[float, float] | None:

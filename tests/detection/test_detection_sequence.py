@@ -568,3 +568,36 @@ def test_a_new_track_found_where_a_prediction_put_it_is_reported_at_once(scripte
         calls = scripted([_result(mode=mode)])
         result = seq_module.DetectionSequence(CAMERA)(image, 0.0, 0.0, 0.0, predicted=prediction)
         assert calls[0] is prediction and result.found == reported, result.reason
+
+
+def test_the_width_is_read_where_short_edges_are_measured_not_at_the_horizon():
+    """Far out the edges are short and their crossings with the horizon scatter: the ground
+    geometry's width is read about their common vanishing point where both are measured
+    (the ray-cast airport at 1280 x 720 from 3.8 to 3.0 km read 0.14-0.30 for a true 0.18-0.22
+    from the slopes' difference alone). Two 16 px edges of the runway at 3.8 km, their far ends
+    moved 0.6 px apart or together (the near ends exact): the width is 5 % off where the slopes'
+    difference is 37 % off."""
+    from visland.camera import CameraModel
+    from visland.detection.horizon import horizon_frame
+    from visland.detection.sequence import _ground_geometry
+    from visland.flight import simulate_flight
+    from visland.scenarios import get_scenario
+    scenario = get_scenario("thesis-1")
+    states = simulate_flight(scenario)
+    camera = CameraModel.from_fov(1280, 720, 62.0, (0.0, -3.0, 0.0))
+    i = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 3800.0)))
+    exact = _runway_result(states, i, scenario.runway, camera)
+    truth = scenario.runway.width_m / -states.p_runway_m[i, 2] / math.cos(states.dpsi_rad[i])
+    assert _ground_geometry(exact, camera)[1] == pytest.approx(truth, rel=0.02)
+    horizon = horizon_frame(camera, exact.roll_rad, exact.pitch_rad)
+    for spread in (+0.6, -0.6):
+        segments = {}
+        for name, side in (("left", -1.0), ("right", +1.0)):
+            far, near = np.asarray(exact.segments_uv[name], float)
+            along = (far - near) / np.linalg.norm(far - near)
+            segments[name] = np.array([near + 16.0 * along + [side * spread, 0.0], near])
+        short = replace(exact, segments_uv=segments)
+        width = _ground_geometry(short, camera)[1]
+        slopes = [float(horizon.pencil_from_points(*segments[name])[1]) for name in ("left", "right")]
+        assert width == pytest.approx(truth, rel=0.06)
+        assert abs(abs(slopes[1] - slopes[0]) / truth - 1.0) > 0.3
