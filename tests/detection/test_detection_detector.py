@@ -195,3 +195,30 @@ def test_frame_checks_read_the_numbers_numpy_defines():
         steps = np.abs(np.diff(levels, axis=1))
         across = (np.arange(ground[0], ground[2] - 1) + 1) % 8 == 0
         assert block_grid_steps(image, ground) == (float(steps[:, across].mean()), float(steps[:, ~across].mean()))
+
+
+def test_a_stripe_seen_on_the_near_part_of_an_edge_only():
+    """:func:`detector._seen_near_only`: the step beyond an edge seen regularly by the nearer
+    half of the profiles that could resolve it and by hardly any of the farther half is a side
+    stripe resolved near the camera only; the same number of steps spread along the edge (texture
+    beyond it), or too few, is not."""
+    from visland.detection.detector import _seen_near_only
+    params = DetectorParams()
+    width = np.linspace(40.0, 140.0, 24)              # far to near, px
+    median = 0.037                                     # resolved (>= 2.5 px) where width >= 68 px
+    resolved = np.flatnonzero(width * median >= params.staircase_min_px)
+    assert len(resolved) == 17
+    rng = np.random.default_rng(5)
+
+    def ratios_at(indices):
+        ratios = np.full(24, np.nan)
+        ratios[indices] = median * (1.0 + rng.uniform(-0.05, 0.05, len(indices)))
+        return ratios
+
+    assert _seen_near_only(ratios_at(resolved[-6:]), width, median, params)
+    assert _seen_near_only(ratios_at(np.r_[resolved[2], resolved[-5:]]), width, median, params)
+    assert not _seen_near_only(ratios_at(resolved[::3]), width, median, params)          # all along
+    assert not _seen_near_only(ratios_at(resolved[-3:]), width, median, params)          # too few
+    spread = ratios_at(resolved[-6:])
+    spread[resolved[-6:]] = median * np.array([0.7, 1.3, 0.8, 1.25, 0.75, 1.2])          # not paint-regular
+    assert not _seen_near_only(spread, width, median, params)

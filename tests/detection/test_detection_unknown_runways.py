@@ -148,3 +148,26 @@ def test_side_stripes_a_little_darker_than_the_snow_beyond_them(distance):
     # the rule off (no stripe counts as resolved): the edges stay on the paint's inner flank
     inner = detect_runway(image, camera, roll, pitch, params=DetectorParams(staircase_min_px=1000.0))
     assert _errors(inner, camera, labels)[1] > 3.0
+
+
+@pytest.mark.slow
+def test_side_stripes_resolved_on_the_edges_near_parts_only():
+    """The snow airport of the ray-cast approach (2600 x 40 m) at 1024 px, 310 m out: the side
+    stripes (0.9 m) are 3-4 px wide near the bottom of the frame and merge with the step onto
+    them farther up, so only the nearest profiles see the step onto the snow (too few for the
+    whole-edge rule) and the edge found, mixed, is turned: 5.3 px in, the near corners 5.3-6.0 px
+    off with confidence 0.65. Seen as a stripe resolved on the near parts only
+    (:func:`detector._seen_near_only`), both edges move past it: within a pixel."""
+    camera = CameraModel.default(1024)
+    runway = Runway(length_m=2600.0, width_m=40.0)
+    scene = PaintedAirport(seed=3, runway_length_m=2600.0, runway_width_m=40.0, grass_grey=232.0,
+                           marking_grey=196.0, runway_grey=72.0)
+    image, state, labels = airport_frame("thesis-1", 310.0, camera, scene, runway=runway)
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    result = detect_runway(image, camera, roll, pitch)
+    assert result.found and "beyond the near parts of both edges" in result.reason, result.reason
+    near, edge = _errors(result, camera, labels)
+    assert edge < 1.0
+    assert result.corners_found[:2].all() and near.max() < 1.0, (near, result.reason)
+    turned = detect_runway(image, camera, roll, pitch, params=DetectorParams(staircase_near_min_profiles=1000))
+    assert _errors(turned, camera, labels)[1] > 4.0
