@@ -1166,7 +1166,7 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
     0.3 px after). The fits' supports and contrasts are kept; their residuals become the RMS
     distance of the steps seen from the moved line where that is smaller (the edges found lay
     on the paint's flanks, crooked where the stripe is partly resolved: in 'variety 3' at 2048
-    px from 390 to 260 m their residuals of 0.9-1.1 px withheld corners 0.3-1.4 px off).
+    px from 540 to 230 m their residuals of 0.9-1.1 px withheld corners 0.3-1.4 px off).
     Returns ``fits``, the two edges replaced when they moved.
 
     A stripe narrower than ``staircase_min_px`` merges with the step onto it and is not seen:
