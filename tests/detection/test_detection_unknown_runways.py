@@ -158,15 +158,19 @@ def test_side_stripes_resolved_on_the_edges_near_parts_only():
     whole-edge rule) and the edge found, mixed, is turned: 5.3 px in, the near corners 5.3-6.0 px
     off with confidence 0.65. Seen as a stripe resolved on the near parts only
     (:func:`detector._seen_near_only`), both edges move past it: within a pixel."""
+    camera = CameraModel.default(1024)
+    runway = Runway(length_m=2600.0, width_m=40.0)
     scene = PaintedAirport(seed=3, runway_length_m=2600.0, runway_width_m=40.0, grass_grey=232.0,
                            marking_grey=196.0, runway_grey=72.0)
-    result, turned, errors_of = _with_and_without(scene, Runway(length_m=2600.0, width_m=40.0), 310.0,
-                                                  DetectorParams(staircase_near_min_profiles=1000))
+    image, state, labels = airport_frame("thesis-1", 310.0, camera, scene, runway=runway)
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    result = detect_runway(image, camera, roll, pitch)
     assert result.found and "beyond the near parts of both edges" in result.reason, result.reason
-    near, edge = errors_of(result)
+    near, edge = _errors(result, camera, labels)
     assert edge < 1.0
     assert result.corners_found[:2].all() and near.max() < 1.0, (near, result.reason)
-    assert errors_of(turned)[1] > 4.0
+    turned = detect_runway(image, camera, roll, pitch, params=DetectorParams(staircase_near_min_profiles=1000))
+    assert _errors(turned, camera, labels)[1] > 4.0
 
 
 @pytest.mark.slow
@@ -176,23 +180,16 @@ def test_a_threshold_beyond_two_oblique_taxiways_joining_both_sides():
     widths along it, a gap in the surface longer than one width. Bridged over 1 width only
     (``surface_gap_widths``), the runway's surface ended at the junction and the threshold was
     not found (300 m, 1024 px); bridged over 2.5 the near corners are within 0.1 px."""
+    camera = CameraModel.default(1024)
+    runway = Runway(length_m=1200.0, width_m=23.0)
     scene = PaintedAirport(seed=3, runway_length_m=1200.0, runway_width_m=23.0, taxiway_grey=84.0,
                            joining_taxiways=((100.0, 1, 35.0, 250.0), (100.0, -1, 35.0, 250.0)))
-    result, one_width, errors_of = _with_and_without(scene, Runway(length_m=1200.0, width_m=23.0), 300.0,
-                                                     DetectorParams(surface_gap_widths=1.0))
+    image, state, labels = airport_frame("thesis-1", 300.0, camera, scene, runway=runway)
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    result = detect_runway(image, camera, roll, pitch)
     assert result.found, result.reason
-    near, edge = errors_of(result)
+    near, edge = _errors(result, camera, labels)
     assert edge < 0.5
     assert result.corners_found[:2].all() and near.max() < 0.5, (near, result.reason)
+    one_width = detect_runway(image, camera, roll, pitch, params=DetectorParams(surface_gap_widths=1.0))
     assert not one_width.corners_found[:2].any(), one_width.reason
-
-
-def _with_and_without(scene, runway, distance_m, rule_off):
-    """The thesis-1 frame of ``scene`` at ``distance_m`` (1024 px) detected with the default
-    parameters and with ``rule_off``: ``(result, result_off, errors_of)``, ``errors_of(result)``
-    giving its ``(near, edge)`` errors against the frame's labels."""
-    camera = CameraModel.default(1024)
-    image, state, labels = airport_frame("thesis-1", distance_m, camera, scene, runway=runway)
-    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
-    return (detect_runway(image, camera, roll, pitch), detect_runway(image, camera, roll, pitch, params=rule_off),
-            lambda result: _errors(result, camera, labels))
