@@ -171,25 +171,3 @@ def test_side_stripes_resolved_on_the_edges_near_parts_only():
     assert result.corners_found[:2].all() and near.max() < 1.0, (near, result.reason)
     turned = detect_runway(image, camera, roll, pitch, params=DetectorParams(staircase_near_min_profiles=1000))
     assert _errors(turned, camera, labels)[1] > 4.0
-
-
-@pytest.mark.slow
-def test_a_threshold_beyond_two_oblique_taxiways_joining_both_sides():
-    """A 1200 x 23 m runway whose two sides are joined 100 m past the threshold by oblique
-    taxiways (35 deg, asphalt like the runway): both sides are paved over about two runway
-    widths along it, a gap in the surface longer than one width. Bridged over 1 width only
-    (``surface_gap_widths``), the runway's surface ended at the junction and the threshold was
-    not found (300 m, 1024 px); bridged over 2.5 the near corners are within 0.1 px."""
-    camera = CameraModel.default(1024)
-    runway = Runway(length_m=1200.0, width_m=23.0)
-    scene = PaintedAirport(seed=3, runway_length_m=1200.0, runway_width_m=23.0, taxiway_grey=84.0,
-                           joining_taxiways=((100.0, 1, 35.0, 250.0), (100.0, -1, 35.0, 250.0)))
-    image, state, labels = airport_frame("thesis-1", 300.0, camera, scene, runway=runway)
-    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
-    result = detect_runway(image, camera, roll, pitch)
-    assert result.found, result.reason
-    near, edge = _errors(result, camera, labels)
-    assert edge < 0.5
-    assert result.corners_found[:2].all() and near.max() < 0.5, (near, result.reason)
-    one_width = detect_runway(image, camera, roll, pitch, params=DetectorParams(surface_gap_widths=1.0))
-    assert not one_width.corners_found[:2].any(), one_width.reason
