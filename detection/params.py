@@ -310,11 +310,6 @@ class DetectorParams(ParamsFile):
         hold the surface's own level in at least this fraction and are at least this many; rows
         of the surface on the other side of the ground's level past the run's end (a surface that
         changes along the runway) carry it on when at least this many.
-    surface_gap_widths : float
-        The longest such gap bridged, in runway widths along the runway: two taxiways joining
-        both sides at an angle pave them over more than a runway width ('oblique, 1200x23' at
-        2048 px: with 1 the surface ended at the junction from 680 m in, the threshold window
-        lay across the touchdown zone and every corner was withheld).
     surface_side_margin : float
         :func:`transverse.surface_extent` resamples the runway and this fraction of its width
         beyond each edge.
@@ -938,7 +933,6 @@ class DetectorParams(ParamsFile):
     surface_min_contrast: float = 2.0
     surface_resume_fraction: float = 0.6
     surface_resume_rows: int = 3
-    surface_gap_widths: float = 2.5
     surface_side_margin: float = 0.4
     surface_rect_columns: int = 96
     surface_width_samples: float = 50.0
@@ -1183,7 +1177,6 @@ class DetectorParams(ParamsFile):
         "strip_level_fraction": (0.0, 10.0), "ground_level_fraction": (0.0, 10.0),
         "strip_end_rows": (1, 1000, "int"), "surface_min_contrast": (0.0, 255.0),
         "surface_resume_fraction": (0.0, 1.0), "surface_resume_rows": (1, 1000, "int"),
-        "surface_gap_widths": (0.0, 100.0),
         "surface_side_margin": (0.0, 10.0), "surface_rect_columns": (8, 10000, "int"),
         "surface_width_samples": (1.0, 10000.0), "marking_band_widths": (0.0, 100.0),
         "transverse_columns": (8, 10000, "int"), "transverse_column_span": (0.0, 1.0), "transverse_min_significance": (0.0, 100.0),

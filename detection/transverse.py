@@ -224,7 +224,7 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     same_surface = np.abs(np.nan_to_num(surface - surface_level, nan=np.inf)) < 0.5 * abs(reference)
 
     def gap_limit(depth):
-        return params.surface_gap_widths * width * depth * depth / fx
+        return width * depth * depth / fx
 
     def extend(index, direction):
         while True:
