@@ -59,7 +59,8 @@ def scene_of(args):
     return PaintedAirport(runway_length_m=args.runway[0], runway_width_m=args.runway[1], seed=args.seed,
                           joining_taxiways=tuple(joining), haze_range_m=args.haze_m, taxiway_grey=args.taxiway_grey,
                           taxiway_offset_m=-(4 * args.runway[1] + 2.5), grass_grey=args.ground_grey,
-                          runway_grey=args.runway_grey, marking_grey=args.marking_grey)
+                          runway_grey=args.runway_grey, marking_grey=args.marking_grey,
+                          rubber=tuple(tuple(float(a) for a in spec.split(",")) for spec in args.rubber))
 
 
 def _draw(job):
@@ -86,7 +87,8 @@ def _draw_new(job):
         return grey
     # grass tinted green, paved areas left grey: the mask of paved ground ray-cast the same way
     paved = PaintedAirport(**{**scene.__dict__, "grass_grey": 0.0, "runway_grey": 255.0, "marking_grey": 255.0,
-                              "taxiway_grey": 255.0, "fields": False, "haze_range_m": 1e12})
+                              "taxiway_grey": 255.0, "fields": False, "haze_range_m": 1e12,
+                              "rubber": tuple((*zone[:3], 255.0) for zone in scene.rubber)})
     mask = draw_frame(paved, camera, p, R, supersample=supersample, blur_sigma_px=0.5, noise_grey=0.0) / 255.0
     tint = np.array([-14.0, 12.0, (14.0 * 0.299 - 12.0 * 0.587) / 0.114])
     return np.clip(grey[..., None] + (1.0 - mask[..., None]) * tint, 0, 255).round().astype(np.uint8)
@@ -107,6 +109,9 @@ def main(argv=None) -> int:
     parser.add_argument("--runway-grey", type=float, default=78.0, help="grey level of the runway (default 78)")
     parser.add_argument("--marking-grey", type=float, default=225.0,
                         help="grey level of the markings (default 225; 196: worn paint, darker than snow)")
+    parser.add_argument("--rubber", nargs="*", default=[],
+                        help="rubber deposits on the runway: x_start_m,x_end_m,width_fraction,grey (e.g. "
+                             "150,700,0.8,70: a touchdown zone darker than the runway)")
     parser.add_argument("--size", default="2048", help="N or WxH (default 2048)")
     parser.add_argument("--hfov", type=float, default=None, help="horizontal field of view, deg (default: SPEC 45 deg)")
     parser.add_argument("--distortion", default=None, help="k1,k2,p1,p2,k3 (OpenCV)")
@@ -128,6 +133,14 @@ def main(argv=None) -> int:
         value = getattr(args, name)
         if not 0.0 <= value <= 255.0:
             parser.error(f"--{name.replace('_', '-')} must be a grey level from 0 to 255, got {value:g}")
+    for spec in args.rubber:
+        try:
+            x_start, x_end, fraction, grey = (float(a) for a in spec.split(","))
+        except ValueError:
+            parser.error(f"--rubber {spec!r}: expected x_start_m,x_end_m,width_fraction,grey (four numbers)")
+        if not (x_start < x_end and 0.0 < fraction <= 1.0 and 0.0 <= grey <= 255.0):
+            parser.error(f"--rubber {spec!r}: needs x_start_m < x_end_m, a width fraction in (0, 1] and a grey "
+                         "level from 0 to 255")
 
     from visland.camera import CameraModel
     from visland.contracts import MEASUREMENT_COLUMNS, write_csv
@@ -165,7 +178,7 @@ def main(argv=None) -> int:
     if args.cache:
         import hashlib
         key = hashlib.sha1(repr((scene, camera, args.scenario, args.fps, args.colour, args.seed,
-                                 args.supersample)).encode()).hexdigest()[:12]
+                                 args.supersample) + ((scene.rubber,) if scene.rubber else ())).encode()).hexdigest()[:12]
         cache = Path(args.cache) / key
         cache.mkdir(parents=True, exist_ok=True)
     jobs = [(scene, camera, states.p_runway_m[i], R[i], args.colour, args.seed * 100003 + int(i), args.supersample,
@@ -202,7 +215,7 @@ def main(argv=None) -> int:
         writer.writerows(rows)
     summary = summarise(rows)
     figures = {"benchmark": "raycast_approach", "camera": camera.to_json_dict(), "colour": args.colour,
-               "runway": list(args.runway), "joining": args.joining, "fps": args.fps, "frames": len(rows),
+               "runway": list(args.runway), "joining": args.joining, "rubber": args.rubber, "fps": args.fps, "frames": len(rows),
                "detect_ms_median": round(1e3 * float(np.median(detect_s)), 1), "minutes": round(elapsed / 60, 2),
                "bands": summary}
     print(f"{len(rows)} frames above 100 ft ({width}x{height}, {'colour' if args.colour else 'grey'}) in "

@@ -37,8 +37,8 @@ from visland.detection.pencil import FloatFrame
 from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of,
                                      net_step, parabola_peak, refine_line, sample_profiles)
 from visland.detection.result import DetectionResult, not_found
-from visland.detection.threshold_marking import (ground_begins, marked_at_start, starts_on_its_stripes,
-                                                 threshold_marking)
+from visland.detection.threshold_marking import (ground_begins, marked_at_start, paint_before,
+                                                 starts_on_its_stripes, threshold_marking)
 from visland.detection.transverse import find_transverse_line, pavement_beyond_edges, surface_extent
 from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
                                          wider_strip_beside)
@@ -1387,6 +1387,16 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                     d_near_expected, window(d_near_expected), outward=1, min_step=min_step,
                                     colour=ctx.colour, surface_level=surface_level, params=params)
+    if ((near is None or not near.spans) and not edges_reach_border and extent is not None
+            and window(d_near_expected)[1] < d_near < d_exit - params.threshold_exit_margin_px):
+        # the surface seemed to end well before the edges do (a concrete runway's touchdown zone
+        # darkened by rubber, its clean threshold zone as light as the ground: 'oblique, 1200x23'
+        # from 900 m in): the threshold is looked for where the edges' support ends
+        again = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
+                                     d_near, window(d_near), outward=1, min_step=min_step, colour=ctx.colour,
+                                     surface_level=surface_level, params=params)
+        if again is not None:
+            near = again
     if near is not None and not near.spans:
         notes.append("threshold withheld: the transverse step found does not span the runway's width")
         near = None
@@ -1460,6 +1470,17 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         if beyond:
             notes.append(f"threshold withheld: its step continues beyond the runway's {' and '.join(beyond)} "
                          f"edge{'s' if len(beyond) > 1 else ''} (a pavement crossing or joining the runway there)")
+            near = None
+    if near is not None and not near.method.startswith("marking"):
+        # runway paint nearer than the threshold: the runway begins before it (a touchdown zone's
+        # rubber ending on concrete as light as the ground, the step at the rubber's start). Not
+        # asked of a threshold on a marking: paint before it is the pavement's (a displaced
+        # threshold's arrows)
+        painted = paint_before(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, near.depth_px,
+                               d_exit - params.threshold_exit_margin_px, min_step, params=params)
+        if painted is not None:
+            notes.append(f"threshold withheld: runway paint {painted:.1f} runway widths nearer than the threshold found "
+                         "(the runway begins before it)")
             near = None
     if (near is not None and not near.method.startswith("marking")
             and starts_on_its_stripes(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,

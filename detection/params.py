@@ -89,6 +89,8 @@ NOT_SCALED_PX = (
     "check_min_span_px", "check_transition_halfspan_px", "check_transition_side_px", "check_line_min_sigma_px",
     # the blur of the ground's step into the pavement, read past (threshold_marking.marked_at_start)
     "marked_start_skip_px",
+    # paint's least depth before a threshold: two lines half a pixel apart (threshold_marking.paint_before)
+    "paint_before_min_px",
     # the measurement's sub-pixel floors, blur and resolution limits (detector)
     "edge_band_min_px", "edge_image_margin_px", "edge_blur_px", "chroma_resolved_stripe_px", "vp_line_min_sigma_px",
     "centre_band_min_px", "centre_min_width_px", "confidence_residual_px",
@@ -692,6 +694,14 @@ class DetectorParams(ParamsFile):
     marking_min_pavement_widths, marking_max_pavement_widths : float
         A threshold marking (:func:`threshold_marking.threshold_marking`) must begin between these
         many runway widths inside the pavement.
+    paint_before_from_widths, paint_before_widths, paint_before_min_px : float
+        :func:`threshold_marking.paint_before`: runway paint (a threshold band's lines) read from
+        the first to the second many runway widths nearer than the threshold step found, over
+        this many pixels of depth at least, means the step lies inside the runway: the threshold
+        is withheld.
+    paint_before_noise_sigmas, paint_before_agreement : float
+        Paint there stands out of the ground's texture by this many robust sigmas, and two
+        consecutive lines hold it in the same columns (this intersection over union at least).
     marking_columns, marking_column_span : int, tuple of 2 float
         It is read on transverse lines sampled at this many points between these fractions of the
         width (clear of the side stripes and of the edges' blur).
@@ -1083,6 +1093,11 @@ class DetectorParams(ParamsFile):
     marking_min_pavement_widths: float = 0.8
     marking_max_pavement_widths: float = 12.0
     marking_columns: int = 64
+    paint_before_from_widths: float = 0.5
+    paint_before_widths: float = 8.0
+    paint_before_min_px: float = 1.0
+    paint_before_noise_sigmas: float = 5.0
+    paint_before_agreement: float = 0.5
     marking_column_span: tuple = (0.06, 0.94)
     marking_min_resolved_px: float = 1.5
     marking_unresolved_min_span_px: float = 6.0
@@ -1243,6 +1258,9 @@ class DetectorParams(ParamsFile):
         "ground_begin_middle_samples": (3, 1000, "int"), "ground_begin_side_band": (0.0, 10.0),
         "ground_begin_side_samples": (1, 1000, "int"), "ground_begin_chroma_rows_px": (0.5, 1000.0), "marking_min_pavement_widths": (0.0, 1000.0),
         "marking_max_pavement_widths": (0.0, 1000.0), "marking_columns": (8, 10000, "int"),
+        "paint_before_from_widths": (0.0, 1000.0), "paint_before_widths": (0.0, 1000.0),
+        "paint_before_min_px": (0.0, 1000.0),
+        "paint_before_noise_sigmas": (0.0, 1000.0), "paint_before_agreement": (0.0, 1.0),
         "marking_column_span": (0.0, 1.0), "marking_min_resolved_px": (0.0, 1000.0),
         "marking_unresolved_min_span_px": (0.0, 10000.0), "marking_start_fraction": (0.0, 10.0),
         "marking_unresolved_coverage": (0.0, 1.0), "marking_unresolved_plain_px": (0.0, 1000.0),

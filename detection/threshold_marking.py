@@ -45,7 +45,7 @@ from visland.detection.pencil import row_mean
 from visland.detection.refine import PixelLine, chroma_of, percentile_of, remap_inside
 from visland.detection.transverse import TransverseLine, edge_crossings_s, transverse_grid, transverse_line_h
 
-__all__ = ["ThresholdMarking", "threshold_marking", "marked_at_start", "ground_begins", "STRIPES_FROM_THRESHOLD_WIDTHS"]
+__all__ = ["ThresholdMarking", "threshold_marking", "marked_at_start", "ground_begins", "paint_before", "STRIPES_FROM_THRESHOLD_WIDTHS"]
 
 #: Threshold stripes begin 6 m past the threshold (ICAO Annex 14 5.2.4.5; FAA: 20 ft), in runway
 #: widths for a 45 m runway (the width is not known in metres: 0.1 to 0.26 of 23-60 m widths).
@@ -54,6 +54,9 @@ STRIPES_FROM_THRESHOLD_WIDTHS = 6.0 / 45.0
 #: How far past the threshold :func:`marked_at_start` reads the plain pavement, in runway widths
 #: (the touchdown zone's and aiming point's marks, 150-400 m in, brighten part of it).
 PLAIN_REACH_WIDTHS = 6.0
+
+#: Most lines :func:`paint_before` reads (half a pixel apart, farther apart over a deeper span).
+MAX_PAINT_LINES = 160
 
 #: Depth pixels under which a marking's blur along the runway shows on a single line of the
 #: band test (its lines are half a pixel apart), and the blur allowed around a bar one line wide.
@@ -261,11 +264,9 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     if not contrast >= max(2.0 * min_step, abs(pavement_step)):
         return doubtful
     marked = np.nan_to_num((values - surface) * sign, nan=-1.0) > 0.5 * contrast
-    quarters = np.array_split(np.arange(n_columns), 4)
-    share = np.stack([marked[:, q].mean(axis=1) for q in quarters], axis=1)        # (rows, 4)
     coverage = marked.mean(axis=1)
-    runs = (np.diff(marked.astype(np.int8), axis=1) == 1).sum(axis=1) + marked[:, 0]
-    spans_all = (share >= params.marking_quarter_min_share).all(axis=1) & rows_ok
+    spans_all, runs = _marks_across(marked, params)
+    spans_all &= rows_ok
     is_bar = spans_all & (coverage >= params.marking_bar_coverage)
     is_stripes = spans_all & (runs >= params.marking_min_stripes)
     band = is_bar | is_stripes
@@ -396,6 +397,116 @@ STRIPES_INSIDE_WIDTHS = (0.3, 0.5)
 #: Correlation across the runway's columns between the band before the stripes and the stripes
 #: at least this high: the band holds the same stripes.
 STRIPES_ALIKE = 0.7
+
+
+def _marks_across(marked: np.ndarray, params: DetectorParams) -> tuple[np.ndarray, np.ndarray]:
+    """Per line across the runway (rows of ``marked``, columns from the left edge to the right):
+    whether it holds markings in every quarter of the width (``marking_quarter_min_share`` of
+    each quarter's columns at least), and how many separate runs of marked columns it holds."""
+    quarters = np.array_split(np.arange(marked.shape[1]), 4)
+    share = np.stack([marked[:, q].mean(axis=1) for q in quarters], axis=1)        # (lines, 4)
+    runs = (np.diff(marked.astype(np.int8), axis=1) == 1).sum(axis=1) + marked[:, 0]
+    return (share >= params.marking_quarter_min_share).all(axis=1), runs
+
+
+def paint_before(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine, d_step: float,
+                 d_limit: float, min_step: float, reach_widths: float | None = None,
+                 params: DetectorParams | None = None) -> float | None:
+    """How many runway widths nearer than a threshold at ``d_step`` runway paint lies, between
+    the edges carried on toward the camera: None when there is none there.
+
+    Before a runway's threshold lies ground (or a blast pad's or displaced threshold's pavement,
+    whose step is found first): no white paint across the width. Threshold stripes, the
+    designation and the touchdown-zone marks there mean the step found is inside the runway:
+    a rubber-darkened touchdown zone ending on concrete as light as the ground beside it (the
+    ray-cast 1200 x 23 m runway, grey 112 on grass 105: the threshold placed at the rubber's
+    start 150 m in, 12-33 px off, with confidence 0.8), or a marking's edge taken for the step
+    when the pavement does not differ from the ground. Lines across the runway are read from
+    ``paint_before_from_widths`` runway widths nearer than the step (a pixel at least) to
+    ``reach_widths`` runway widths nearer
+    (``params.paint_before_widths``) or ``d_limit``, whichever is first, over
+    ``marking_column_span`` of the width; a line is painted as :func:`threshold_marking` reads
+    threshold stripes (markings in every quarter of the width, ``marking_min_stripes`` separate
+    stripes at least; not a bar, which a bright field across the approach also makes) with paint
+    brighter than the ground beside the runway on that line and than the line's lower quartile,
+    by twice ``min_step`` and ``paint_before_noise_sigmas`` times the ground's texture (a robust
+    sigma of its spread beside the runway) at least. Two consecutive painted lines marked in the
+    same columns (``paint_before_agreement`` of them, intersection over union: stripes run along
+    the runway, grass texture does not), over ``paint_before_min_px`` of depth at least, are
+    paint, not a texture's chance.
+
+    Parameters
+    ----------
+    image : ndarray (H, W) uint8
+        Grey levels.
+    horizon : HorizonFrame
+    s0 : float
+        The runway's vanishing point on the horizon.
+    left, right : PixelLine
+        The runway's edges.
+    d_step : float
+        Depth (px below the horizon) of the step taken for the threshold.
+    d_limit : float
+        Deepest depth read (the runway leaves the image there).
+    min_step : float
+        Grey levels (the frame's minimum contrast).
+    reach_widths : float, optional
+        How far nearer to read, in runway widths.
+    params : DetectorParams, optional
+        ``paint_before_*``, ``marking_columns``,
+        ``marking_column_span``, ``marking_quarter_min_share`` and ``marking_min_stripes``.
+
+    Returns
+    -------
+    float or None
+        The runway widths from the step to the nearest painted line, or None.
+    """
+    params = params or DetectorParams()
+    reach_widths = params.paint_before_widths if reach_widths is None else reach_widths
+    across = _across_at(horizon, s0, left, right, d_step)
+    if across is None:
+        return None
+    line_left, line_right, width_k, k_centre = across
+    fx = horizon.camera.fx
+    d_hi = min(d_limit, float(depth_along(fx, d_step, -reach_widths, width_k)))
+    # from paint_before_from_widths nearer (the step's own blur, and the paint bleeding across it,
+    # 0.1-0.3 widths on 16 stripes at 1024 px, are not paint before it), lines half a pixel apart,
+    # at most MAX_PAINT_LINES of them (paint near the camera is deep)
+    d_lo = max(d_step + 1.0, float(depth_along(fx, d_step, -params.paint_before_from_widths, width_k)))
+    step = max(0.5, (d_hi - d_lo) / MAX_PAINT_LINES)
+    depths = np.arange(d_lo, d_hi, step)
+    if len(depths) < 2:
+        return None
+    n_columns = params.marking_columns
+    fractions = np.linspace(*params.marking_column_span, n_columns)
+    lo, hi = params.strip_side_band
+    beside = np.concatenate([np.linspace(-hi, -lo, 6), np.linspace(1.0 + lo, 1.0 + hi, 6)])
+    ends_left, ends_right, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths,
+                                                          np.concatenate([fractions, beside]), image.shape)
+    # stripes told apart: a line crosses the runway over two pixels per stripe gap at least
+    rows_ok = inside.all(axis=1) & (np.linalg.norm(ends_right - ends_left, axis=1) >= 2.0 * n_columns / 8.0)
+    if rows_ok.sum() < 2:
+        return None
+    values = remap_inside(image, grid[..., 0].astype(np.float32), grid[..., 1].astype(np.float32), inside,
+                          cv2.BORDER_CONSTANT, np.nan)[rows_ok]
+    # each line's base: the ground beside the runway there, or the line's own lower quartile if
+    # brighter (a light field across the approach); paint stands out of the ground's texture
+    # (its spread beside the runway, a robust sigma) by paint_before_noise_sigmas
+    across_runway, ground = values[:, :n_columns], values[:, n_columns:]
+    ground_level = np.median(ground, axis=1)
+    texture = 1.4826 * float(np.median(np.abs(ground - ground_level[:, None])))
+    base = np.maximum(ground_level, np.percentile(across_runway, 25.0, axis=1))
+    rise = max(2.0 * min_step, params.paint_before_noise_sigmas * texture)
+    marked = across_runway - base[:, None] >= rise
+    spans_all, runs = _marks_across(marked, params)
+    painted = spans_all & (runs >= params.marking_min_stripes)
+    # stripes run along the runway: the next line is painted in the same columns (grass texture
+    # bright in separate places on one line is not, on the next)
+    same = (marked[:-1] & marked[1:]).sum(axis=1) / np.maximum((marked[:-1] | marked[1:]).sum(axis=1), 1)
+    held = painted[:-1] & painted[1:] & (same >= params.paint_before_agreement)
+    if not held.any() or step * (held.sum() + 1) < params.paint_before_min_px:
+        return None
+    return float(widths_along(fx, depths[rows_ok][np.argmax(held)], d_step, width_k))
 
 
 def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,

@@ -171,3 +171,28 @@ def test_side_stripes_resolved_on_the_edges_near_parts_only():
     assert result.corners_found[:2].all() and near.max() < 1.0, (near, result.reason)
     turned = detect_runway(image, camera, roll, pitch, params=DetectorParams(staircase_near_min_profiles=1000))
     assert _errors(turned, camera, labels)[1] > 4.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("distance_m", [400.0, 700.0])
+def test_a_threshold_is_not_placed_where_the_rubber_of_the_touchdown_zone_begins(distance_m):
+    """A concrete runway as light as the grass beside it (1200 x 23 m, grey 112 on 105), its
+    touchdown zone darkened by rubber from 150 to 700 m (80 % of the width, grey 70): the dark
+    band is the strip that differs from the ground, and its near end, 150 m past the threshold,
+    was taken for the threshold (12-33 px off, confidence 0.7-0.9). The threshold stripes and
+    the side stripes lie nearer than that step (:func:`threshold_marking.paint_before`): the
+    threshold is withheld, the edges kept."""
+    camera = CameraModel.default(1024)
+    runway = Runway(length_m=1200.0, width_m=23.0)
+    scene = PaintedAirport(seed=3, runway_length_m=1200.0, runway_width_m=23.0, runway_grey=112.0,
+                           rubber=((150.0, 700.0, 0.8, 70.0),))
+    image, state, labels = airport_frame("thesis-1", distance_m, camera, scene, runway=runway)
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+    result = detect_runway(image, camera, roll, pitch)
+    assert result.found and "runway paint" in result.reason, result.reason
+    near, edge = _errors(result, camera, labels)
+    assert edge < 1.0
+    assert not result.corners_found[:2].any(), (near, result.reason)
+    # the rule off: the rubber's start is reported as the threshold, pixels off
+    blind = detect_runway(image, camera, roll, pitch, params=DetectorParams(paint_before_widths=0.0))
+    assert blind.corners_found[:2].all() and _errors(blind, camera, labels)[0].min() > 5.0

@@ -15,7 +15,7 @@ from :mod:`visland.features` (the same camera model).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -82,6 +82,10 @@ class PaintedAirport:
     threshold_stripes: bool = True
     #: grey level of the distance haze (and of rays that reach no ground)
     haze_grey: float = 165.0
+    #: rubber deposits on the runway (its touchdown zones): ``(x_start_m, x_end_m,
+    #: width_fraction, grey)``, a band centred on the centre line, under the markings (out of
+    #: the repr: frames cached under the repr of a scene without them stay valid)
+    rubber: tuple = field(default=(), repr=False)
 
     def rectangles(self):
         """Oriented rectangles ``(x_c, y_c, half_length, half_width, angle_rad, grey)`` in paint order:
@@ -121,6 +125,8 @@ class PaintedAirport:
         if not self.runway:
             return rects, marks
         rects.append((L / 2, 0.0, L / 2, half, 0.0, self.runway_grey))
+        for x_start, x_end, width_fraction, grey in self.rubber:
+            rects.append(((x_start + x_end) / 2, 0.0, (x_end - x_start) / 2, width_fraction * half, 0.0, grey))
         if self.pre_threshold_m > 0:
             rects.append((-self.pre_threshold_m / 2, 0.0, self.pre_threshold_m / 2, half, 0.0, self.runway_grey))
             if self.threshold_heads:
