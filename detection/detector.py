@@ -1389,9 +1389,9 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
                                     colour=ctx.colour, surface_level=surface_level, params=params)
     if ((near is None or not near.spans) and not edges_reach_border and extent is not None
             and window(d_near_expected)[1] < d_near < d_exit - params.threshold_exit_margin_px):
-        # the surface seemed to end well before the edges do (a concrete runway's touchdown zone
-        # darkened by rubber, its clean threshold zone as light as the ground: 'oblique, 1200x23'
-        # from 900 m in): the threshold is looked for where the edges' support ends
+        # the surface seemed to end well before the edges do (a concrete runway's middle
+        # darkened by tyre rubber, its clean part nearer the threshold as light as the ground:
+        # 'oblique, 1200x23'): the threshold is looked for where the edges' support ends
         again = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
                                      d_near, window(d_near), outward=1, min_step=min_step, colour=ctx.colour,
                                      surface_level=surface_level, params=params)

@@ -416,15 +416,15 @@ def paint_before(image, horizon: HorizonFrame, s0: float, left: PixelLine, right
     the edges carried on toward the camera: None when there is none there.
 
     Before a runway's threshold lies ground (or a blast pad's or displaced threshold's pavement,
-    whose step is found first): no white paint across the width. Threshold stripes, the
-    designation and the touchdown-zone marks there mean the step found is inside the runway:
+    whose step is found first): no white paint across the width. Threshold stripes there mean
+    the step found is inside the runway:
     a rubber-darkened touchdown zone ending on concrete as light as the ground beside it (the
     ray-cast 1200 x 23 m runway, grey 112 on grass 105: the threshold placed at the rubber's
     start 150 m in, 12-33 px off, with confidence 0.8), or a marking's edge taken for the step
     when the pavement does not differ from the ground. Lines across the runway are read from
     ``paint_before_from_widths`` runway widths nearer than the step (a pixel at least) to
-    ``reach_widths`` runway widths nearer
-    (``params.paint_before_widths``) or ``d_limit``, whichever is first, over
+    ``reach_widths`` runway widths nearer (``params.paint_before_widths``) or ``d_limit``,
+    whichever is first, at most :data:`MAX_PAINT_LINES` lines, over
     ``marking_column_span`` of the width; a line is painted as :func:`threshold_marking` reads
     threshold stripes (markings in every quarter of the width, ``marking_min_stripes`` separate
     stripes at least; not a bar, which a bright field across the approach also makes) with paint
