@@ -60,7 +60,7 @@ def scene_of(args):
                           joining_taxiways=tuple(joining), haze_range_m=args.haze_m, taxiway_grey=args.taxiway_grey,
                           taxiway_offset_m=-(4 * args.runway[1] + 2.5), grass_grey=args.ground_grey,
                           runway_grey=args.runway_grey, marking_grey=args.marking_grey,
-                          rubber=tuple(tuple(float(a) for a in spec.split(",")) for spec in args.rubber))
+                          rubber=args.rubber)
 
 
 def _draw(job):
@@ -133,6 +133,7 @@ def main(argv=None) -> int:
         value = getattr(args, name)
         if not 0.0 <= value <= 255.0:
             parser.error(f"--{name.replace('_', '-')} must be a grey level from 0 to 255, got {value:g}")
+    zones = []
     for spec in args.rubber:
         try:
             x_start, x_end, fraction, grey = (float(a) for a in spec.split(","))
@@ -141,6 +142,8 @@ def main(argv=None) -> int:
         if not (x_start < x_end and 0.0 < fraction <= 1.0 and 0.0 <= grey <= 255.0):
             parser.error(f"--rubber {spec!r}: needs x_start_m < x_end_m, a width fraction in (0, 1] and a grey "
                          "level from 0 to 255")
+        zones.append((x_start, x_end, fraction, grey))
+    args.rubber = tuple(zones)
 
     from visland.camera import CameraModel
     from visland.contracts import MEASUREMENT_COLUMNS, write_csv
@@ -215,7 +218,7 @@ def main(argv=None) -> int:
         writer.writerows(rows)
     summary = summarise(rows)
     figures = {"benchmark": "raycast_approach", "camera": camera.to_json_dict(), "colour": args.colour,
-               "runway": list(args.runway), "joining": args.joining, "rubber": args.rubber, "fps": args.fps, "frames": len(rows),
+               "runway": list(args.runway), "joining": args.joining, "rubber": [list(zone) for zone in args.rubber], "fps": args.fps, "frames": len(rows),
                "detect_ms_median": round(1e3 * float(np.median(detect_s)), 1), "minutes": round(elapsed / 60, 2),
                "bands": summary}
     print(f"{len(rows)} frames above 100 ft ({width}x{height}, {'colour' if args.colour else 'grey'}) in "

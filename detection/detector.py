@@ -1380,15 +1380,16 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
     # found there would be a marking (the last second before the threshold)
     d_exit = _depth_leaving_image(horizon, s0_vp, 0.5 * (k_left_through_vp + k_right_through_vp), d_mid, bottom_depth,
                                   width, height)
+    near_window = window(d_near_expected)
     if d_near_expected >= d_exit - params.threshold_exit_margin_px:
         near = None
         edges_reach_border = True
     else:
         near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
-                                    d_near_expected, window(d_near_expected), outward=1, min_step=min_step,
+                                    d_near_expected, near_window, outward=1, min_step=min_step,
                                     colour=ctx.colour, surface_level=surface_level, params=params)
     if ((near is None or not near.spans) and not edges_reach_border and extent is not None
-            and window(d_near_expected)[1] < d_near < d_exit - params.threshold_exit_margin_px):
+            and near_window[1] < d_near < d_exit - params.threshold_exit_margin_px):
         # the surface seemed to end well before the edges do (a concrete runway's middle
         # darkened by tyre rubber, its clean part nearer the threshold as light as the ground:
         # 'oblique, 1200x23'): the threshold is looked for where the edges' support ends

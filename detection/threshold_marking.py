@@ -410,8 +410,7 @@ def _marks_across(marked: np.ndarray, params: DetectorParams) -> tuple[np.ndarra
 
 
 def paint_before(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine, d_step: float,
-                 d_limit: float, min_step: float, reach_widths: float | None = None,
-                 params: DetectorParams | None = None) -> float | None:
+                 d_limit: float, min_step: float, params: DetectorParams | None = None) -> float | None:
     """How many runway widths nearer than a threshold at ``d_step`` runway paint lies, between
     the edges carried on toward the camera: None when there is none there.
 
@@ -423,7 +422,7 @@ def paint_before(image, horizon: HorizonFrame, s0: float, left: PixelLine, right
     start 150 m in, 12-33 px off, with confidence 0.8), or a marking's edge taken for the step
     when the pavement does not differ from the ground. Lines across the runway are read from
     ``paint_before_from_widths`` runway widths nearer than the step (a pixel at least) to
-    ``reach_widths`` runway widths nearer (``params.paint_before_widths``) or ``d_limit``,
+    ``paint_before_widths`` runway widths nearer or ``d_limit``,
     whichever is first, at most :data:`MAX_PAINT_LINES` lines, over
     ``marking_column_span`` of the width; a line is painted as :func:`threshold_marking` reads
     threshold stripes (markings in every quarter of the width, ``marking_min_stripes`` separate
@@ -450,8 +449,6 @@ def paint_before(image, horizon: HorizonFrame, s0: float, left: PixelLine, right
         Deepest depth read (the runway leaves the image there).
     min_step : float
         Grey levels (the frame's minimum contrast).
-    reach_widths : float, optional
-        How far nearer to read, in runway widths.
     params : DetectorParams, optional
         ``paint_before_*``, ``marking_columns``,
         ``marking_column_span``, ``marking_quarter_min_share`` and ``marking_min_stripes``.
@@ -462,13 +459,12 @@ def paint_before(image, horizon: HorizonFrame, s0: float, left: PixelLine, right
         The runway widths from the step to the nearest painted line, or None.
     """
     params = params or DetectorParams()
-    reach_widths = params.paint_before_widths if reach_widths is None else reach_widths
     across = _across_at(horizon, s0, left, right, d_step)
     if across is None:
         return None
     line_left, line_right, width_k, k_centre = across
     fx = horizon.camera.fx
-    d_hi = min(d_limit, float(depth_along(fx, d_step, -reach_widths, width_k)))
+    d_hi = min(d_limit, float(depth_along(fx, d_step, -params.paint_before_widths, width_k)))
     # from paint_before_from_widths nearer (the step's own blur, and the paint bleeding across it,
     # 0.1-0.3 widths on 16 stripes at 1024 px, are not paint before it), lines half a pixel apart,
     # at most MAX_PAINT_LINES of them (paint near the camera is deep)

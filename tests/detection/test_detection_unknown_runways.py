@@ -179,9 +179,9 @@ def test_a_threshold_is_not_placed_where_the_rubber_of_the_touchdown_zone_begins
     """A concrete runway as light as the grass beside it (1200 x 23 m, grey 112 on 105), its
     touchdown zone darkened by rubber from 150 to 700 m (80 % of the width, grey 70): the dark
     band is the strip that differs from the ground, and its near end, 150 m past the threshold,
-    was taken for the threshold (12-33 px off, confidence 0.7-0.9). The threshold stripes and
-    the side stripes lie nearer than that step (:func:`threshold_marking.paint_before`): the
-    threshold is withheld, the edges kept."""
+    was taken for the threshold (12-33 px off, confidence 0.7-0.9). The threshold stripes lie
+    nearer than that step (:func:`threshold_marking.paint_before`): the threshold is withheld,
+    the edges kept."""
     camera = CameraModel.default(1024)
     runway = Runway(length_m=1200.0, width_m=23.0)
     scene = PaintedAirport(seed=3, runway_length_m=1200.0, runway_width_m=23.0, runway_grey=112.0,
