@@ -1407,6 +1407,20 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
                                window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour,
                                surface_level=surface_level, params=params)
     far_withheld = False
+    if far is not None and far.spans and far.depth_px - d_far > params.end_past_edges_fraction * depth_span:
+        # both edges run on well past the step found (rubber ending on the paler pavement beyond
+        # the touchdown zone: the ray-cast airport's 1200 x 23 m asphalt runway, its end placed
+        # 12 px short from 1.5 km to 400 m): the end is looked for where they end, nearer than
+        # that step, or withheld
+        lo, hi = window(d_far)
+        hi = min(hi, far.depth_px - 0.5 * params.end_past_edges_fraction * depth_span)
+        again = (find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far,
+                                      (lo, hi), outward=-1, min_step=min_step, colour=ctx.colour,
+                                      surface_level=surface_level, params=params) if hi > lo else None)
+        if again is None or not again.spans:
+            notes.append(f"runway end withheld: both edges run on {far.depth_px - d_far:.1f} px past the step found")
+            far_withheld = True
+        far = again if again is not None and again.spans else None
     marking_widths = math.nan
     if near is not None:
         # a step inside the pavement (a patch's edge, the stripes' inner edge) is not where the

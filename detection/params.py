@@ -566,6 +566,23 @@ class DetectorParams(ParamsFile):
         reported from its first threshold marking seen or once the aircraft is within this many
         heights; while a strip is not confirmed the whole frame is searched afresh too, and
         another strip found there with a threshold marking in two frames running replaces it.
+        Confirmation by place holds only in the frames it holds in (a marking seen confirms a
+        track for good).
+    weak_max_lateral_heights, place_min_confidence : float
+        A strip unmarked so far whose confidence is below ``place_min_confidence`` is confirmed
+        by its place only within ``weak_max_lateral_heights`` (instead of
+        ``unconfirmed_max_lateral_heights``): a doubtful strip beside the approach is a taxiway as
+        often as the runway. On the ray-cast airport with a rubber-darkened 1200 x 23 m runway on
+        grass of nearly its grey (1024 px, 5 Hz) the runway's edges held nowhere beyond 1.3 km
+        and the parallel taxiway, 0.64 heights beside the aircraft at 2.5 km, was followed to
+        100 ft at confidences 0.29-0.56 while within a height, 144 frames reported 50-450 px
+        off; on the robustness study's approaches 2 % (2048 px) and 1 % (1024 px) of the runway's
+        frames found lay more than 0.5 heights out below 0.6.
+    replacement_min_confidence : float
+        While the strip followed is not confirmed and doubtful (below ``place_min_confidence``, or
+        lost in the frame), an unmarked strip found afresh with at least this confidence, itself
+        confirmed by its place, in this frame and the one before, replaces it
+        (:meth:`~visland.detection.sequence.DetectionSequence._look_for_confirmed`).
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
@@ -661,6 +678,11 @@ class DetectorParams(ParamsFile):
         The threshold (runway end) is searched within the largest of this many pixels, half the
         ``threshold_search_fraction`` of the edges' depth span, and this fraction of its
         expected depth, of where the surface ends.
+    end_past_edges_fraction : float
+        A runway end found where both edges run on farther than this fraction of their depth
+        span is a step inside the pavement (rubber ending on the paler pavement beyond the
+        touchdown zone): the end is searched again where the edges end, nearer than that step,
+        and withheld if not found there.
     border_clearance_px : float
         Edges supported to within this depth of the image bottom reach its border (a threshold
         not found is then below the image).
@@ -1038,6 +1060,9 @@ class DetectorParams(ParamsFile):
     max_lateral_heights: float = 3.0
     max_lateral_heights_widths: float = 1.5
     unconfirmed_max_lateral_heights: float = 1.0
+    weak_max_lateral_heights: float = 0.5
+    place_min_confidence: float = 0.6
+    replacement_min_confidence: float = 0.8
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     corner_min_confidence: float = 0.4
@@ -1076,6 +1101,7 @@ class DetectorParams(ParamsFile):
     centre_bright_support: float = 0.5
     threshold_window_min_px: float = 8.0
     threshold_window_depth_fraction: float = 0.1
+    end_past_edges_fraction: float = 0.1
     border_clearance_px: float = 3.0
     threshold_exit_margin_px: float = 2.0
     pavement_search_fraction: float = 0.5
@@ -1233,7 +1259,7 @@ class DetectorParams(ParamsFile):
         "low_contrast_hough_bands": (0.0, 1.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
-        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "weak_max_lateral_heights": (0.0, 1e6), "place_min_confidence": (0.0, 1.0), "replacement_min_confidence": (0.0, 1.0), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
         "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
         "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
         "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),
@@ -1249,7 +1275,7 @@ class DetectorParams(ParamsFile):
         "centre_band_max_factor": (1.0, 100.0), "centre_width_fraction": (0.0, 1.0),
         "centre_min_width_px": (0.5, 1000.0), "centre_image_margin_px": (0.0, 1000.0),
         "centre_min_support": (0.0, 1.0), "centre_bright_support": (0.0, 1.0),
-        "threshold_window_min_px": (0.0, 10000.0), "threshold_window_depth_fraction": (0.0, 10.0),
+        "threshold_window_min_px": (0.0, 10000.0), "threshold_window_depth_fraction": (0.0, 10.0), "end_past_edges_fraction": (0.0, 10.0),
         "border_clearance_px": (0.0, 1000.0), "threshold_exit_margin_px": (0.0, 1000.0),
         "pavement_search_fraction": (0.0, 10.0), "pavement_search_px": (0.0, 10000.0), "pavement_search_extend": (1.0, 100.0),
         "pavement_min_move_px": (0.0, 1000.0), "pavement_window_px": (0.5, 1000.0),

@@ -138,6 +138,7 @@ class DetectionSequence:
         self.recent: list[tuple[float, DetectionResult]] = []     # found, within static_window_s
         self.markings_seen: list[tuple[float, float]] = []        # (t_s, widths): markings inside the pavement
         self.confirmed = False                                    # the strip followed is the runway approached
+        self.marked = False                                       # ... shown by a marking in its track
         self.replacement: tuple | None = None                     # (t_s, k_centre) a marked strip found afresh
         self.track_frames = 0                                     # frames found in the track followed
 
@@ -155,6 +156,7 @@ class DetectionSequence:
         self.recent = []
         self.markings_seen = []
         self.confirmed = False
+        self.marked = False
         self.replacement = None
         self.track_frames = 0
 
@@ -205,9 +207,13 @@ class DetectionSequence:
         if result.found:
             result = self._follow_threshold(result, float(t_s))
         if result.found and prior is None:
-            self.confirmed = False                                # a new track: confirmed by its own frames
-        if result.found and not self.confirmed:
-            self.confirmed = _confirmed(result, self.camera, self.params)
+            self.marked = False                                   # a new track: confirmed by its own frames
+        if result.found:
+            # a marking seen confirms the track for good; its place alone, only the frame it
+            # holds in (a parallel taxiway within a height at 2.4 km is several heights out at
+            # 1 km)
+            self.marked = self.marked or result.shows_runway_marking
+            self.confirmed = self.marked or _confirmed(result, self.camera, self.params)
         if result.found:
             self.track_frames = 1 if prior is None else self.track_frames + 1
             if seen_before:
@@ -243,7 +249,12 @@ class DetectionSequence:
         (:attr:`~visland.detection.result.DetectionResult.shows_runway_marking`) in this frame and
         the one before is the runway, and
         replaces the track (``(found, None)``: the frame starts a new one); the same strip found
-        so confirms the track. On the
+        so confirms the track. While the strip followed is doubtful (lost in this frame or its
+        confidence below ``place_min_confidence``), an unmarked strip found afresh with
+        ``replacement_min_confidence`` and confirmed by its place replaces it too: on the
+        ray-cast airport with a rubber-darkened runway (1024 px) the parallel taxiway was
+        followed at 0.29-0.56 from 2.5 km, single frames found the runway at 0.93-0.96 from
+        1.3 km, no threshold marking among them. On the
         robustness study's overcast frames (2048 px) the parallel taxiway acquired in fog at
         2.4 km was followed, not reported, while single frames found the runway from 1.2 km. A
         strip confirmed by its place alone does not replace the track: on 'concrete, sand, mono'
@@ -253,11 +264,17 @@ class DetectionSequence:
             return result, prior
         fresh = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params)
         candidate, self.replacement = self.replacement, None
-        if not (fresh.found and fresh.shows_runway_marking):
+        weak = not result.found or result.confidence < self.params.place_min_confidence
+        convincing = (weak and fresh.found and fresh.confidence >= self.params.replacement_min_confidence
+                      and _confirmed(fresh, self.camera, self.params))
+        if not (fresh.found and (fresh.shows_runway_marking or convincing)):
             return result, prior
+        if not fresh.shows_runway_marking and self.good_geometry is not None and not _identity_mismatch(
+                fresh, self.camera, self.good_geometry[0], math.nan, dt, self.params):
+            return result, prior                                  # the strip followed, found again
         if self.good_geometry is None or not _identity_mismatch(fresh, self.camera, self.good_geometry[0], math.nan,
                                                                 dt, self.params):
-            self.confirmed = True                              # the strip followed, marked
+            self.confirmed = self.marked = True                # the strip followed, marked
             return result, prior
         # another strip, marked: it replaces the one followed when the frame before found it too
         # (one frame's marking can be a texture's end read as paint)
@@ -598,27 +615,38 @@ def _lateral_offset(result: DetectionResult, camera: CameraModel) -> tuple[float
 
 
 def _confirmed(result: DetectionResult, camera: CameraModel, params: DetectorParams) -> bool:
-    """Whether the strip of ``result`` is confirmed as the runway approached
-    (``DetectorParams.unconfirmed_max_lateral_heights``): it shows a runway marking, or lies within
-    that many camera heights of the aircraft, or the aircraft is over it or nearly
-    (``max_lateral_heights_widths`` of its widths). Every ground line parallel to the runway shares
-    its vanishing point, and a taxiway beside it passes every other test: on the robustness
-    study's overcast frames (2048 px) the runway's edges were lost in the fog and a parallel taxiway
-    1.33 heights out was acquired at 2.4 km, unmarked. A strip whose place cannot be measured (no
-    horizon) is not held back."""
+    """Whether the strip of ``result`` is confirmed as the runway approached in this frame: it
+    shows a runway marking, or the aircraft is over it or nearly (``max_lateral_heights_widths``
+    of its widths), or it lies within ``unconfirmed_max_lateral_heights`` camera heights of the
+    aircraft, within ``weak_max_lateral_heights`` only when its confidence is below
+    ``place_min_confidence`` (:class:`DetectorParams`). Every ground line parallel to the runway
+    shares its vanishing point, and a taxiway beside it passes every other test: on the
+    robustness study's overcast frames (2048 px) the runway's edges were lost in the fog and a
+    parallel taxiway 1.33 heights out was acquired at 2.4 km, unmarked; on the ray-cast airport
+    with a rubber-darkened runway (1200 x 23 m, grey on grass of nearly its grey, 1024 px) the
+    runway's edges held nowhere beyond 1.3 km and a parallel taxiway 0.64 heights out was
+    followed from 2.5 km to 100 ft, confidence 0.29-0.56 beyond 1.5 km. A strip whose place
+    cannot be measured (no horizon) is not held back."""
     if result.shows_runway_marking:
         return True
     offset = _lateral_offset(result, camera)
-    return (offset is None or offset[0] <= params.unconfirmed_max_lateral_heights
-            or offset[1] <= params.max_lateral_heights_widths)
+    if offset is None or offset[1] <= params.max_lateral_heights_widths:
+        return True
+    limit = (params.unconfirmed_max_lateral_heights if result.confidence >= params.place_min_confidence
+             else params.weak_max_lateral_heights)
+    return offset[0] <= limit
 
 
 def _unconfirmed_reason(result: DetectionResult, camera: CameraModel, params: DetectorParams) -> str:
     """Why the strip of ``result``, not :func:`_confirmed`, is not reported (one sentence)."""
     heights, widths = _lateral_offset(result, camera)
+    limit = (f"more than {params.unconfirmed_max_lateral_heights:g}"
+             if result.confidence >= params.place_min_confidence or heights > params.unconfirmed_max_lateral_heights
+             else f"more than {params.weak_max_lateral_heights:g} at a confidence of {result.confidence:.2f}, "
+                  f"below {params.place_min_confidence:g}")
     return (f"the strip followed lies {heights:.2f} camera heights ({widths:.0f} of its widths) beside the aircraft "
-            f"(more than {params.unconfirmed_max_lateral_heights:g}) and has shown no threshold marking since it "
-            "was acquired: not confirmed as the runway approached (a taxiway or road beside it?)")
+            f"({limit}) and has shown no threshold marking since it was acquired: not confirmed as the runway "
+            "approached (a taxiway or road beside it?)")
 
 
 def _not_approached(k_centre: float, width_ratio: float, params: DetectorParams) -> bool:

@@ -431,19 +431,21 @@ def test_a_strip_more_than_three_heights_to_the_side_is_not_the_runway_being_app
     assert detect_runway(image, camera, 0.0, math.radians(-2.0)).found
 
 
-def _beside_runway_frames(beside_m: float, marked: bool):
-    """thesis-3 from 2.4 km at 5 Hz (20 frames, 2048 px camera): the states, the frames' indices
-    and, per frame, a result on the exact edges of a strip ``beside_m`` metres beside the runway."""
+def _beside_runway_frames(beside_m: float, marked: bool, scenario_name: str = "thesis-3",
+                          start_m: float = 2400.0, confidence: float = 0.9):
+    """``scenario_name`` from ``start_m`` before the threshold at 5 Hz (20 frames, 2048 px
+    camera): the states, the frames' indices and, per frame, a result on the exact edges of a
+    strip ``beside_m`` metres beside the runway, found with ``confidence``."""
     from visland.flight import simulate_flight
     from visland.scenarios import get_scenario
-    scenario = get_scenario("thesis-3")
+    scenario = get_scenario(scenario_name)
     states = simulate_flight(scenario)
     camera = CameraModel.default(2048)
     step = int(round(0.2 / (states.t_s[1] - states.t_s[0])))
-    first = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - 2400.0)))
+    first = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - start_m)))
     frames = [first + k * step for k in range(20)]
-    return states, camera, frames, [_runway_result(states, i, scenario.runway, camera, beside_m, marked)
-                                    for i in frames]
+    return states, camera, frames, [replace(_runway_result(states, i, scenario.runway, camera, beside_m, marked),
+                                            confidence=confidence) for i in frames]
 
 
 def _replay(monkeypatch, states, camera, frames, tracked, acquired):
@@ -536,6 +538,54 @@ def test_a_strip_confirmed_by_its_place_alone_does_not_replace_the_one_followed(
     results, priors = _replay(monkeypatch, states, camera, frames, runway, runway[:1] + taxiway[1:])
     assert not any(r.found for r in results), [r.reason for r in results]
     assert all(prior is runway[k - 1] for k, prior in priors)                     # the runway followed
+
+
+@pytest.mark.parametrize("confidence, reported", [(0.4, False), (0.9, True)])
+def test_a_doubtful_strip_beside_the_approach_is_not_confirmed_by_its_place(monkeypatch, confidence, reported):
+    """A parallel taxiway 94.5 m left of the runway seen from thesis-1 at 2.4 km lies 0.67-0.74
+    camera heights beside the aircraft (the ray-cast airport's rubber scene: the runway's own
+    edges lost, the taxiway followed at confidences 0.29-0.56 and reported to 100 ft). Within a
+    height but beyond ``weak_max_lateral_heights``, unmarked, it is confirmed by its place only
+    at ``place_min_confidence`` or more: followed all along, reported at 0.9, never at 0.4."""
+    states, camera, frames, script = _beside_runway_frames(-94.5, False, "thesis-1", 2400.0, confidence)
+    lateral = np.abs(states.p_runway_m[frames, 1] + 94.5) / -states.p_runway_m[frames, 2]
+    assert 0.55 < lateral.min() and lateral.max() < 0.95, lateral
+    results, priors = _replay(monkeypatch, states, camera, frames, script, script)
+    assert [r.found for r in results] == [False] + [reported] * (len(frames) - 1), [r.reason for r in results]
+    assert [k for k, _ in priors] == list(range(1, len(frames)))                 # followed all along
+    if not reported:
+        assert "at a confidence of 0.40, below 0.6" in results[-1].reason, results[-1].reason
+
+
+def test_a_strip_confirmed_by_its_place_is_reported_only_while_it_holds(monkeypatch):
+    """The same taxiway seen at confidence 0.9 from 1.6 km: 0.94 heights out, 1.10 four seconds
+    later. Confirmed by its place, not by a marking, it is reported in the frames it lies within
+    a height and not once it lies farther (it was reported to 100 ft, 2.5 heights out)."""
+    states, camera, frames, script = _beside_runway_frames(-94.5, False, "thesis-1", 1600.0)
+    lateral = np.abs(states.p_runway_m[frames, 1] + 94.5) / -states.p_runway_m[frames, 2]
+    results, _ = _replay(monkeypatch, states, camera, frames, script, script)
+    within = [k for k in range(1, len(frames)) if lateral[k] < 0.98]
+    beyond = [k for k in range(len(frames)) if lateral[k] > 1.02]
+    assert len(within) >= 4 and len(beyond) >= 8, lateral
+    assert all(results[k].found for k in within), [results[k].reason for k in within]
+    assert not any(results[k].found for k in beyond)
+    assert all(results[k].reason.startswith("not reported: the strip followed lies") for k in beyond)
+
+
+def test_a_convincing_strip_found_afresh_replaces_a_doubtful_one(monkeypatch):
+    """Following the taxiway 94.5 m out at confidence 0.4 (not reported), each frame is searched
+    afresh: once that search finds the runway, unmarked but at confidence 0.9 and under the
+    aircraft, in two frames running (the rubber scene's single frames found it at 0.93-0.96 from
+    1.3 km, no threshold marking among them), it replaces the taxiway and is reported."""
+    states, camera, frames, taxiway = _beside_runway_frames(-94.5, False, "thesis-1", 2400.0, 0.4)
+    _, _, _, runway = _beside_runway_frames(0.0, False, "thesis-1", 2400.0, 0.9)
+    switch = 8
+    replaced = switch + 1
+    results, priors = _replay(monkeypatch, states, camera, frames, taxiway[:replaced + 1] + runway[replaced + 1:],
+                              taxiway[:switch] + runway[switch:])
+    assert [r.found for r in results] == [False] * replaced + [True] * (len(frames) - replaced)
+    assert results[replaced] is runway[replaced]
+    assert all(prior is runway[k - 1] for k, prior in priors if k > replaced + 1)
 
 
 def test_a_new_track_is_reported_from_its_second_frame(scripted):

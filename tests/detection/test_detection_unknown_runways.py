@@ -196,3 +196,29 @@ def test_a_threshold_is_not_placed_where_the_rubber_of_the_touchdown_zone_begins
     # the rule off: the rubber's start is reported as the threshold, pixels off
     blind = detect_runway(image, camera, roll, pitch, params=DetectorParams(paint_before_widths=0.0))
     assert blind.corners_found[:2].all() and _errors(blind, camera, labels)[0].min() > 5.0
+
+
+@pytest.mark.slow
+def test_the_runway_end_is_not_placed_where_the_rubber_of_the_touchdown_zone_ends():
+    """An asphalt runway (1200 x 23 m, grey 78 on grass 105), its touchdown zone darkened by
+    rubber from 150 to 700 m (80 % of the width, grey 50), 700 m out at 1024 px: the surface's
+    grey level ends where the rubber does, 500 m short of the runway's end, and the runway end
+    was placed on that step (far corners 12.6 px off, confidence 0.94) while both edges ran on
+    past it. Searched again where the edges end (``end_past_edges_fraction``), the end is within
+    a pixel."""
+    camera = CameraModel.default(1024)
+    runway = Runway(length_m=1200.0, width_m=23.0)
+    scene = PaintedAirport(seed=0, runway_length_m=1200.0, runway_width_m=23.0, runway_grey=78.0,
+                           taxiway_offset_m=-94.5, taxiway_grey=84.0, haze_range_m=6000.0,
+                           joining_taxiways=((300.0, 1, 90.0, 260.0), (450.0, -1, 35.0, 260.0)),
+                           rubber=((150.0, 700.0, 0.8, 50.0),))
+    image, state, labels = airport_frame("thesis-1", 700.0, camera, scene, runway=runway)
+    roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
+
+    def far_errors(result):
+        assert result.found and result.corners_found[2:].all(), result.reason
+        return np.linalg.norm(result.corners_uv[2:] - labels.corners_uv[0][2:], axis=1)
+
+    assert far_errors(detect_runway(image, camera, roll, pitch)).max() < 1.0
+    blind = detect_runway(image, camera, roll, pitch, params=DetectorParams(end_past_edges_fraction=10.0))
+    assert far_errors(blind).min() > 5.0
