@@ -39,7 +39,8 @@ from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary
 from visland.detection.result import DetectionResult, not_found
 from visland.detection.threshold_marking import (ground_begins, marked_at_start, paint_before,
                                                  starts_on_its_stripes, threshold_marking)
-from visland.detection.transverse import find_transverse_line, pavement_beyond_edges, surface_extent
+from visland.detection.transverse import (TransverseLine, find_transverse_line, pavement_beyond_edges,
+                                          surface_extent)
 from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
                                          wider_strip_beside)
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
@@ -1270,6 +1271,54 @@ def _edge_step(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: Dete
     return float(np.median(net[sampled])) if sampled.any() else math.nan
 
 
+def _edges_run_on(image, end: TransverseLine, vp_uv: np.ndarray, stretch_px: float,
+                  params: DetectorParams) -> tuple | None:
+    """How far each edge runs on past the runway end ``end``: ``(left, right)``, the contrast
+    across the edge (:func:`_edge_contrast`) over ``stretch_px`` of depth beyond the end line
+    over the same just before it, or None when the stretch is too short to read (under 2 px) or
+    the contrast before it too weak (under ``min_contrast``). Past a runway's end both edges
+    cross the ground (ratios near 0); past a step inside the pavement (rubber ending on the
+    paler asphalt beyond the touchdown zone, or on concrete as light as the grass) the pavement
+    and its side stripes still part from the ground there."""
+    depth = end.depth_px
+    if not (math.isfinite(depth) and depth > stretch_px + 1.0 and stretch_px >= 2.0):
+        return None
+    vp = np.asarray(vp_uv, float)
+
+    def stretch(corner, d_from, d_to):
+        # along the edge through ``corner`` and the vanishing point, depth scaling with the
+        # distance to the vanishing point
+        corner = np.asarray(corner, float)
+        return np.array([vp + (corner - vp) * (d_from / depth), vp + (corner - vp) * (d_to / depth)])
+
+    ratios = []
+    for corner, other in ((end.corner_left_uv, end.corner_right_uv), (end.corner_right_uv, end.corner_left_uv)):
+        beyond = _edge_contrast(image, stretch(corner, depth - 1.0 - stretch_px, depth - 1.0),
+                                stretch(other, depth - 1.0 - stretch_px, depth - 1.0), params)
+        before = _edge_contrast(image, stretch(corner, depth + 1.0, depth + 1.0 + stretch_px),
+                                stretch(other, depth + 1.0, depth + 1.0 + stretch_px), params)
+        if not (math.isfinite(beyond) and math.isfinite(before)) or before < params.min_contrast:
+            return None
+        ratios.append(beyond / before)
+    return tuple(ratios)
+
+
+def _edge_contrast(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams) -> float:
+    """Range of grey levels of the median profile across the edge ``segment_uv`` (``other_uv``:
+    the runway's other edge), over the side stripe's reach and a band either side of the edge
+    (as :func:`_edge_step` reads it): the step onto the pavement, the stripe's ridge, the
+    pavement's own shades; a few levels where the edge line crosses plain ground. NaN when
+    nothing is sampled."""
+    across = _across_edge(segment_uv, other_uv)
+    if across is None:
+        return math.nan
+    points, direction, outward, width = across
+    reach = params.side_stripe_width_fraction * width + params.edge_blur_px + np.clip(0.15 * width, 1.5, 8.0)
+    profiles, _ = sample_profiles(image, points, outward, direction, float(reach.max()) + 1.0, step_px=0.5)
+    profile = np.nanmedian(profiles, axis=0) if profiles.size else np.array([math.nan])
+    return float(np.nanmax(profile) - np.nanmin(profile)) if np.isfinite(profile).any() else math.nan
+
+
 def _unbalanced_edges(ctx: _Context, pair: _EdgePair) -> str:
     """Why the two edges cannot be one runway's sides (``""`` when they can): across both, the
     surface must change the same way (outside minus inside of one sign) and by comparable
@@ -1421,6 +1470,14 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             notes.append(f"runway end withheld: both edges run on {far.depth_px - d_far:.1f} px past the step found")
             far_withheld = True
         far = again if again is not None and again.spans else None
+    if far is not None and far.spans:
+        # the edges' support can end with the step too (tracking, the edges refined over the
+        # surface's extent, which ends where the rubber does): their own step, read on past it
+        ratios = _edges_run_on(ctx.image, far, vp_uv, max(2.0, params.end_past_edges_fraction * depth_span), params)
+        if ratios is not None and min(ratios) >= params.end_run_on_ratio:
+            notes.append(f"runway end withheld: both edges run on past the step found (the contrast across them "
+                         f"there {min(ratios):.2f} of theirs before it or more)")
+            far, far_withheld = None, True
     marking_widths = math.nan
     if near is not None:
         # a step inside the pavement (a patch's edge, the stripes' inner edge) is not where the
