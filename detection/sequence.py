@@ -47,13 +47,18 @@ height, read off the edges in the horizon frame, must be close to the remembered
 ground line parallel to the runway shares its vanishing point, so a strip of fields or a taxiway
 beside it passes every single-frame test, but not this one.
 
-A strip followed from its acquisition is reported only once it is confirmed as the runway
+A strip followed from its acquisition is reported only while it is confirmed as the runway
 approached (``unconfirmed_max_lateral_heights``): its threshold carried a threshold marking in
-one of its frames (``DetectionResult.threshold_marked``; taxiways and roads carry none), or its
-centre line came within one camera height of the aircraft (``k_C = Y / h``), or the aircraft is
-over it. Until then it is followed (the next frame's prior) but reported not found, saying why,
+one of its frames (``DetectionResult.threshold_marked``; taxiways and roads carry none), or, in
+the frame itself, its centre line lies within one camera height of the aircraft (``k_C = Y /
+h``; half a height when its confidence is below ``place_min_confidence``), or the aircraft is
+over it. Otherwise it is followed (the next frame's prior) but reported not found, saying why,
 and each frame is also searched afresh: a strip found there with a threshold marking replaces
-it (one confirmed by its place alone does not: the aircraft can start over a taxiway). In fog a
+it (one confirmed by its place alone does not: the aircraft can start over a taxiway), and
+while the strip followed is doubtful, so does a convincing one (``replacement_min_confidence``)
+confirmed by its place. A parallel taxiway beside a runway whose own edges hardly show (the
+ray-cast airport's rubber-darkened concrete) was followed and reported from 2.5 km to 100 ft:
+within a height at first, at confidence 0.3-0.56, then several heights out. In fog a
 parallel taxiway 1.33 heights out was acquired where the runway's own edges gave no segment,
 and reported for 1.5 km (the robustness study's overcast frames at 2048 px); the price is the
 first frames of an approach that starts more than a height off the runway's centre line, far
