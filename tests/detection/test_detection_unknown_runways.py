@@ -198,6 +198,20 @@ def test_a_threshold_is_not_placed_where_the_rubber_of_the_touchdown_zone_begins
     assert blind.corners_found[:2].all() and _errors(blind, camera, labels)[0].min() > 5.0
 
 
+def _rubber_airport(runway_grey: float, rubber_grey: float):
+    """The rubber scene of ``benchmarks/raycast_approach.py --runway 1200,23 --rubber ...`` (its
+    seed 3, here 0: other fields and buildings): a 1200 x 23 m runway of ``runway_grey`` on grass 105, rubber of ``rubber_grey`` from 150 to
+    700 m over 80 % of its width, the parallel taxiway 94.5 m to its left, taxiways joining it
+    at 300 m (right) and 450 m (left, oblique), haze 6 km; the 1024 px camera, the runway."""
+    camera = CameraModel.default(1024)
+    runway = Runway(length_m=1200.0, width_m=23.0)
+    scene = PaintedAirport(seed=0, runway_length_m=1200.0, runway_width_m=23.0, runway_grey=runway_grey,
+                           taxiway_offset_m=-94.5, taxiway_grey=84.0, haze_range_m=6000.0,
+                           joining_taxiways=((300.0, 1, 90.0, 260.0), (450.0, -1, 35.0, 260.0)),
+                           rubber=((150.0, 700.0, 0.8, rubber_grey),))
+    return camera, runway, scene
+
+
 @pytest.mark.slow
 def test_the_runway_end_is_not_placed_where_the_rubber_of_the_touchdown_zone_ends():
     """An asphalt runway (1200 x 23 m, grey 78 on grass 105), its touchdown zone darkened by
@@ -206,12 +220,7 @@ def test_the_runway_end_is_not_placed_where_the_rubber_of_the_touchdown_zone_end
     was placed on that step (far corners 12.6 px off, confidence 0.94) while both edges ran on
     past it. Searched again where the edges end (``end_past_edges_fraction``), the end is within
     a pixel."""
-    camera = CameraModel.default(1024)
-    runway = Runway(length_m=1200.0, width_m=23.0)
-    scene = PaintedAirport(seed=0, runway_length_m=1200.0, runway_width_m=23.0, runway_grey=78.0,
-                           taxiway_offset_m=-94.5, taxiway_grey=84.0, haze_range_m=6000.0,
-                           joining_taxiways=((300.0, 1, 90.0, 260.0), (450.0, -1, 35.0, 260.0)),
-                           rubber=((150.0, 700.0, 0.8, 50.0),))
+    camera, runway, scene = _rubber_airport(78.0, 50.0)
     image, state, labels = airport_frame("thesis-1", 700.0, camera, scene, runway=runway)
     roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
 
@@ -232,12 +241,7 @@ def test_a_tracked_runway_end_is_withheld_where_both_edges_run_on():
     there in every frame (far corners 13.4-13.8 px off, confidence 0.9). The contrast across both
     edges runs on past that step (``end_run_on_ratio``): the end is withheld, never wrong."""
     from visland.detection.sequence import DetectionSequence
-    camera = CameraModel.default(1024)
-    runway = Runway(length_m=1200.0, width_m=23.0)
-    scene = PaintedAirport(seed=0, runway_length_m=1200.0, runway_width_m=23.0, runway_grey=112.0,
-                           taxiway_offset_m=-94.5, taxiway_grey=84.0, haze_range_m=6000.0,
-                           joining_taxiways=((300.0, 1, 90.0, 260.0), (450.0, -1, 35.0, 260.0)),
-                           rubber=((150.0, 700.0, 0.8, 70.0),))
+    camera, runway, scene = _rubber_airport(112.0, 70.0)
     frames = [airport_frame("thesis-1", d, camera, scene, runway=runway) for d in (560.0, 546.0, 532.0, 518.0)]
 
     def far_errors(params):
