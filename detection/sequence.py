@@ -274,15 +274,13 @@ class DetectionSequence:
                       and _confirmed(fresh, self.camera, self.params))
         if not (fresh.found and (fresh.shows_runway_marking or convincing)):
             return result, prior
-        if not fresh.shows_runway_marking and self.good_geometry is not None and not _identity_mismatch(
-                fresh, self.camera, self.good_geometry[0], math.nan, dt, self.params):
-            return result, prior                                  # the strip followed, found again
         if self.good_geometry is None or not _identity_mismatch(fresh, self.camera, self.good_geometry[0], math.nan,
                                                                 dt, self.params):
-            self.confirmed = self.marked = True                # the strip followed, marked
+            if fresh.shows_runway_marking:
+                self.confirmed = self.marked = True            # the strip followed, marked
             return result, prior
-        # another strip, marked: it replaces the one followed when the frame before found it too
-        # (one frame's marking can be a texture's end read as paint)
+        # another strip, marked or convincing: it replaces the one followed when the frame
+        # before found it too (one frame's marking can be a texture's end read as paint)
         geometry = _ground_geometry(fresh, self.camera)
         if (candidate is not None and geometry is not None and t_s - candidate[0] <= self.params.hold_s
                 and not _identity_mismatch(fresh, self.camera, candidate[1], math.nan, t_s - candidate[0],
