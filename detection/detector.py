@@ -1293,26 +1293,33 @@ def _edges_run_on(image, end: TransverseLine, vp_uv: np.ndarray, stretch_px: flo
 
     ratios = []
     for corner, other in ((end.corner_left_uv, end.corner_right_uv), (end.corner_right_uv, end.corner_left_uv)):
-        beyond = _edge_contrast(image, stretch(corner, depth - 1.0 - stretch_px, depth - 1.0),
-                                stretch(other, depth - 1.0 - stretch_px, depth - 1.0), params)
+        edge_beyond = stretch(corner, depth - 1.0 - stretch_px, depth - 1.0)
+        other_beyond = stretch(other, depth - 1.0 - stretch_px, depth - 1.0)
+        beyond = _edge_contrast(image, edge_beyond, other_beyond, params)
+        # the same rows a runway width farther out: the ground's own contrast there (a road
+        # crossing past the end, fields in bands near the horizon, read across a slanted edge)
+        ground = _edge_contrast(image, edge_beyond, other_beyond, params, offset_widths=1.0)
         before = _edge_contrast(image, stretch(corner, depth + 1.0, depth + 1.0 + stretch_px),
                                 stretch(other, depth + 1.0, depth + 1.0 + stretch_px), params)
-        if not (math.isfinite(beyond) and math.isfinite(before)) or before < params.min_contrast:
+        if not all(math.isfinite(x) for x in (beyond, ground, before)) or before < params.min_contrast:
             return None
-        ratios.append(beyond / before)
+        ratios.append((beyond - ground) / before)
     return tuple(ratios)
 
 
-def _edge_contrast(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams) -> float:
+def _edge_contrast(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams,
+                   offset_widths: float = 0.0) -> float:
     """Range of grey levels of the median profile across the edge ``segment_uv`` (``other_uv``:
     the runway's other edge), over the side stripe's reach and a band either side of the edge
     (as :func:`_edge_step` reads it): the step onto the pavement, the stripe's ridge, the
-    pavement's own shades; a few levels where the edge line crosses plain ground. NaN when
+    pavement's own shades; a few levels where the edge line crosses plain ground. With
+    ``offset_widths``, the same profiles that many local runway widths farther out. NaN when
     nothing is sampled."""
     across = _across_edge(segment_uv, other_uv)
     if across is None:
         return math.nan
     points, direction, outward, width = across
+    points = points + offset_widths * width[:, None] * outward
     reach = params.side_stripe_width_fraction * width + params.edge_blur_px + np.clip(0.15 * width, 1.5, 8.0)
     profiles, _ = sample_profiles(image, points, outward, direction, float(reach.max()) + 1.0, step_px=0.5)
     profile = np.nanmedian(profiles, axis=0) if profiles.size else np.array([math.nan])

@@ -686,12 +686,15 @@ class DetectorParams(ParamsFile):
     end_run_on_ratio : float
         A runway end is withheld when the contrast across both edges (the range of grey levels
         across each: pavement against ground, the side stripe), read over
-        ``end_past_edges_fraction`` of their depth span past it (2 px at least), is at least
-        this fraction of theirs just before it: the edges run on, the step is inside the
-        pavement (tracking, where the edges are refined over the surface's extent and end with
-        it). On the ray-cast 1200 x 23 m runway at 1024 px, 5 Hz: past the rubber's end 0.3-1.4
-        (asphalt, and concrete as light as the grass), past the true end 0.02-0.25 on either
-        side (no rubber), once 0.43 on one.
+        ``end_past_edges_fraction`` of their depth span past it (2 px at least), less the
+        contrast of the same rows a runway width farther out (the ground's own: a road crossing
+        past the end, bands of fields near the horizon), is at least this fraction of theirs
+        just before it: the edges run on, the step is inside the pavement (tracking, where the
+        edges are refined over the surface's extent and end with it). On the ray-cast 1200 x
+        23 m runway at 1024 px, 5 Hz: past the rubber's end 0.27-1.3 (asphalt, and concrete as
+        light as the grass), past the true end within 0.1 of 0 (no rubber), once -0.37; on
+        visland's 'oblique, 1200x23' frame at 450 m, a road crossing just past the end, 0.63
+        and 0.60 without the ground's subtracted, 0.21 and -0.36 with it.
     border_clearance_px : float
         Edges supported to within this depth of the image bottom reach its border (a threshold
         not found is then below the image).
