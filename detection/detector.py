@@ -1246,6 +1246,14 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
     return moved
 
 
+def _stripe_reach_and_band(width: np.ndarray, params: DetectorParams) -> tuple[np.ndarray, np.ndarray]:
+    """Across an edge where the runway is ``width`` pixels wide: how far a side stripe reaches
+    inside it (``side_stripe_width_fraction`` of the width plus ``edge_blur_px``, as
+    :func:`_refine_edge` looks past it) and the band read past that, 15 % of the width, 1.5 to
+    8 px."""
+    return params.side_stripe_width_fraction * width + params.edge_blur_px, np.clip(0.15 * width, 1.5, 8.0)
+
+
 def _edge_step(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams) -> float:
     """Median level just outside the edge ``segment_uv`` minus inside it past a side stripe.
 
@@ -1261,8 +1269,7 @@ def _edge_step(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: Dete
     if across is None:
         return math.nan
     points, direction, outward, width = across
-    reach = params.side_stripe_width_fraction * width + params.edge_blur_px
-    band = np.clip(0.15 * width, 1.5, 8.0)
+    reach, band = _stripe_reach_and_band(width, params)
     profiles, offsets = sample_profiles(image, points, outward, direction, float((reach + band).max()) + 3.0)
     # the profiles are centred on the edge and run outwards: the boundary at offset 0
     net = net_step(profiles, offsets, np.zeros(len(points)), 1, reach, (1.0, 1.0 + band[:, None]),
@@ -1327,8 +1334,8 @@ def _edge_contrast(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: 
         return math.nan
     points, direction, outward, width = across
     points = points + offset_widths * width[:, None] * outward
-    reach = params.side_stripe_width_fraction * width + params.edge_blur_px + np.clip(0.15 * width, 1.5, 8.0)
-    profiles, _ = sample_profiles(image, points, outward, direction, float(reach.max()) + 1.0, step_px=0.5)
+    reach, band = _stripe_reach_and_band(width, params)
+    profiles, _ = sample_profiles(image, points, outward, direction, float((reach + band).max()) + 1.0, step_px=0.5)
     if np.isfinite(profiles).all():
         profile = np.median(profiles, axis=0)               # (nanmedian's cost, without a NaN)
     else:
@@ -1437,6 +1444,12 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         d_far_expected, d_near_expected = extent
         surface_level = extent.level if not in_chroma else math.nan      # a grey level, unknown here
 
+    def transverse(d_expected, d_window, outward):
+        # the transverse step nearest d_expected within d_window, across this pair of edges
+        return find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_expected,
+                                    d_window, outward=outward, min_step=min_step, colour=ctx.colour,
+                                    surface_level=surface_level, params=params)
+
     def window(depth):
         half = max(params.threshold_window_min_px, 0.5 * params.threshold_search_fraction * depth_span,
                    params.threshold_window_depth_fraction * depth)
@@ -1451,17 +1464,13 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         near = None
         edges_reach_border = True
     else:
-        near = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
-                                    d_near_expected, near_window, outward=1, min_step=min_step,
-                                    colour=ctx.colour, surface_level=surface_level, params=params)
+        near = transverse(d_near_expected, near_window, 1)
     if ((near is None or not near.spans) and not edges_reach_border and extent is not None
             and near_window[1] < d_near < d_exit - params.threshold_exit_margin_px):
         # the surface seemed to end well before the edges do (a concrete runway's middle
         # darkened by tyre rubber, its clean part nearer the threshold as light as the ground:
         # 'oblique, 1200x23'): the threshold is looked for where the edges' support ends
-        again = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
-                                     d_near, window(d_near), outward=1, min_step=min_step, colour=ctx.colour,
-                                     surface_level=surface_level, params=params)
+        again = transverse(d_near, window(d_near), 1)
         if again is not None:
             near = again
     if near is not None and not near.spans:
@@ -1469,9 +1478,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         near = None
     elif near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
-    far = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far_expected,
-                               window(d_far_expected), outward=-1, min_step=min_step, colour=ctx.colour,
-                               surface_level=surface_level, params=params)
+    far = transverse(d_far_expected, window(d_far_expected), -1)
     far_withheld = False
     if far is not None and far.spans and far.depth_px - d_far > params.end_past_edges_fraction * depth_span:
         # both edges run on well past the step found (rubber ending on the paler pavement beyond
@@ -1480,9 +1487,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         # that step, or withheld
         lo, hi = window(d_far)
         hi = min(hi, far.depth_px - 0.5 * params.end_past_edges_fraction * depth_span)
-        again = (find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_far,
-                                      (lo, hi), outward=-1, min_step=min_step, colour=ctx.colour,
-                                      surface_level=surface_level, params=params) if hi > lo else None)
+        again = transverse(d_far, (lo, hi), -1) if hi > lo else None
         if again is None or not again.spans:
             notes.append(f"runway end withheld: both edges run on {far.depth_px - d_far:.1f} px past the step found")
             far_withheld = True
@@ -1522,10 +1527,8 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             d_pavement = d_ground
             if math.isfinite(ground_step):              # (NaN: only the chroma told the ground)
                 pavement_step = ground_step
-            again = find_transverse_line(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line,
-                                         d_ground, (d_ground - params.pavement_window_px,
-                                                    min(bottom_depth, d_ground + params.pavement_window_px)), outward=1,
-                                         min_step=min_step, colour=ctx.colour, surface_level=surface_level, params=params)
+            again = transverse(d_ground, (d_ground - params.pavement_window_px,
+                                          min(bottom_depth, d_ground + params.pavement_window_px)), 1)
             moved = (again if again is not None and again.spans
                      and abs(again.depth_px - d_ground) <= params.pavement_agreement_px else False)
             if moved:

@@ -635,20 +635,26 @@ def _confirmed(result: DetectionResult, camera: CameraModel, params: DetectorPar
     offset = _lateral_offset(result, camera)
     if offset is None or offset[1] <= params.max_lateral_heights_widths:
         return True
-    limit = (params.unconfirmed_max_lateral_heights if result.confidence >= params.place_min_confidence
-             else params.weak_max_lateral_heights)
-    return offset[0] <= limit
+    return offset[0] <= _place_limit_heights(result, params)
+
+
+def _place_limit_heights(result: DetectionResult, params: DetectorParams) -> float:
+    """How many camera heights beside the aircraft the strip of ``result`` may lie and be
+    confirmed by its place: ``unconfirmed_max_lateral_heights``, ``weak_max_lateral_heights``
+    below ``place_min_confidence``."""
+    return (params.unconfirmed_max_lateral_heights if result.confidence >= params.place_min_confidence
+            else params.weak_max_lateral_heights)
 
 
 def _unconfirmed_reason(result: DetectionResult, camera: CameraModel, params: DetectorParams) -> str:
     """Why the strip of ``result``, not :func:`_confirmed`, is not reported (one sentence)."""
     heights, widths = _lateral_offset(result, camera)
-    limit = (f"more than {params.unconfirmed_max_lateral_heights:g}"
-             if result.confidence >= params.place_min_confidence or heights > params.unconfirmed_max_lateral_heights
-             else f"more than {params.weak_max_lateral_heights:g} at a confidence of {result.confidence:.2f}, "
-                  f"below {params.place_min_confidence:g}")
+    limit = _place_limit_heights(result, params)
+    why = (f"more than {limit:g} at a confidence of {result.confidence:.2f}, below {params.place_min_confidence:g}"
+           if heights <= params.unconfirmed_max_lateral_heights else
+           f"more than {params.unconfirmed_max_lateral_heights:g}")
     return (f"the strip followed lies {heights:.2f} camera heights ({widths:.0f} of its widths) beside the aircraft "
-            f"({limit}) and has shown no threshold marking since it was acquired: not confirmed as the runway "
+            f"({why}) and has shown no threshold marking since it was acquired: not confirmed as the runway "
             "approached (a taxiway or road beside it?)")
 
 
