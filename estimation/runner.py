@@ -259,34 +259,21 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
     corrected_on_bound = 0           # measurements that have not moved it off since
     diverged_t_s, diverged = math.nan, ""
     n_steps = 0
-    # the height dead-reckoned from the last correction with the inertial vertical speed
-    dead_reckoned_m = float(dh0_m)
-    last_measured_t_s = float(steps[start].t_s)      # (a height pinned on the bound is measured too)
-    restarts = []
+    restart = Restarts(observer, steps[start], dh0_m, restart_after_s)
     for j in range(start + 1, len(steps)):
         inp = steps[j]
-        dead_reckoned_m -= float(steps[j - 1].v_runway_mps[2]) * (float(inp.t_s) - float(steps[j - 1].t_s))
-        gap_s = float(inp.t_s) - last_measured_t_s
-        if (gap_s > restart_after_s and ETA_MIN <= 1.0 / max(dead_reckoned_m, 1e-9) <= ETA_MAX
-                and observer_measurement(inp, observer.features)[0] is not None):
-            observer.reset(inp, dead_reckoned_m)
-            estimate = _initial_estimate(observer, inp, dead_reckoned_m)
-            restarts.append(f"restarted at t = {float(inp.t_s):.2f} s, {gap_s:.1f} s after its last measurement, "
-                            f"from the height dead-reckoned since its last correction ({dead_reckoned_m:.1f} m)")
+        estimate = restart.before_step(inp)
+        if estimate is not None:
             bound_since, corrected_on_bound = math.nan, 0
             if frame_of_step[j] >= 0:
                 record(j, estimate, False)
-            last_correction[0] = last_measured_t_s = float(inp.t_s)
             continue
         t0 = time.perf_counter()
         estimate = step(inp)
         elapsed += time.perf_counter() - t0
         n_steps += 1
         pinned = on_domain_bound(estimate.dh_m)
-        if not estimate.coasting:
-            last_measured_t_s = float(inp.t_s)
-            if not pinned:
-                dead_reckoned_m = float(estimate.dh_m)
+        restart.after_step(inp, estimate, pinned)
         if frame_of_step[j] >= 0:
             record(j, estimate, pinned)
         if not pinned:
@@ -319,9 +306,62 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
                        coasting=coasting, reason=reason, dpsi_rad=dpsi,
                        start_t_s=float(steps[start].t_s), dh0_m=float(dh0_m), step_time_s=elapsed,
                        n_steps=n_steps, params=params, extras=extras,
-                       notes=list(getattr(observer, "notes", ())) + restarts, diverged_t_s=diverged_t_s,
+                       notes=list(getattr(observer, "notes", ())) + restart.notes, diverged_t_s=diverged_t_s,
                        diverged=diverged,
                        **out)
+
+
+class Restarts:
+    """The restart of an observer after a long gap (module docstring), for a loop that steps it.
+
+    Before each step, :meth:`before_step` carries the height dead-reckoned since the last
+    correction to the input's time (``dH' = -v_z``, the previous input's inertial vertical
+    speed, R axes z down) and, when the input carries a measurement more than
+    ``restart_after_s`` after the last one, resets the observer there from that height and
+    returns its initial estimate (the caller then does not step it); after each step,
+    :meth:`after_step` takes the correction in. :attr:`notes` says when it restarted.
+
+    Parameters
+    ----------
+    observer : visland.estimation.base.Observer
+        The observer, already reset at ``first``.
+    first : ObserverInput
+        The input it was reset at.
+    dh0_m : float
+        The height it was reset with, metres.
+    restart_after_s : float
+        Gap without a measurement after which the next one restarts it, seconds.
+    """
+
+    def __init__(self, observer: Observer, first, dh0_m: float, restart_after_s: float = RESTART_AFTER_S):
+        self.observer = observer
+        self.restart_after_s = float(restart_after_s)
+        self.dead_reckoned_m = float(dh0_m)
+        self.last_measured_t_s = float(first.t_s)        # (a height pinned on the bound is measured too)
+        self._previous = first
+        self.notes = []
+
+    def before_step(self, inp):
+        """The initial estimate of a restart at ``inp``, or None: step the observer as usual."""
+        previous, self._previous = self._previous, inp
+        self.dead_reckoned_m -= float(previous.v_runway_mps[2]) * (float(inp.t_s) - float(previous.t_s))
+        gap_s = float(inp.t_s) - self.last_measured_t_s
+        height = self.dead_reckoned_m
+        if not (gap_s > self.restart_after_s and height > 0 and ETA_MIN <= 1.0 / height <= ETA_MAX
+                and observer_measurement(inp, self.observer.features)[0] is not None):
+            return None
+        self.observer.reset(inp, height)
+        self.last_measured_t_s = float(inp.t_s)
+        self.notes.append(f"restarted at t = {float(inp.t_s):.2f} s, {gap_s:.1f} s after its last measurement, "
+                          f"from the height dead-reckoned since its last correction ({height:.1f} m)")
+        return _initial_estimate(self.observer, inp, height)
+
+    def after_step(self, inp, estimate, pinned: bool) -> None:
+        """Take in the estimate of the step at ``inp`` (``pinned``: its height on the domain's bound)."""
+        if not estimate.coasting:
+            self.last_measured_t_s = float(inp.t_s)
+            if not pinned:
+                self.dead_reckoned_m = float(estimate.dh_m)
 
 
 def _level_height(distance_m: float, inp, last_y1: list) -> float:
