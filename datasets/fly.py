@@ -366,6 +366,7 @@ class _Tracked:
         self.observer = make_observer(name, params_for_camera(name, fx_px))
         self.aim_m = aim_m
         self.started = False
+        self.restarts = None               # visland.estimation.runner.Restarts, from the start
         self.last_correction_s = math.nan
         self.dx_m = self.dy_m = self.dh_m = math.nan
         self.observability = math.nan
@@ -392,17 +393,28 @@ class _Tracked:
 
     def step(self, inp, dh0_m):
         from visland.estimation.deviations import deviations_from_lines, deviations_from_points
+        from visland.estimation.runner import Restarts, on_domain_bound
         obs = self.observer
         has = inp.points_yv is not None if obs.features == "points" else inp.lines is not None
         if not self.started:
             if not has:
                 return
             obs.reset(inp, dh0_m)
+            self.restarts = Restarts(obs, inp, dh0_m)
             self.started = True
             self.dh_m = dh0_m
             self.last_correction_s = inp.t_s
+        elif (restarted := self.restarts.before_step(inp)) is not None:
+            # after a long gap, from the height dead-reckoned since the last correction
+            # (visland.estimation.runner.Restarts); its observability counts from here
+            self.dh_m = restarted.dh_m
+            self.observability = float(restarted.observability)
+            self.last_correction_s = inp.t_s
+            self.depth_flow_px = 0.0
+            self.observability_log = []
         else:
             estimate = obs.step(inp)
+            self.restarts.after_step(inp, estimate, on_domain_bound(estimate.dh_m))
             self.dh_m = estimate.dh_m
             self.observability = float(estimate.observability)
             if not estimate.coasting:
@@ -687,6 +699,8 @@ def fly(scenario, options: FlyOptions, echo=None) -> dict:
         "decisions": decisions, "deviations": deviations_at,
         "in_window": bool(gear is not None and 60.0 <= gear[0] <= 823.0 and abs(gear[1]) <= runway.width_m / 2),
         "measurements_trusted_from": trusted_from,
+        "observer_restarts": [f"{o.observer.name}: {note}" for o in (guide_obs, monitor_obs) if o.started
+                              for note in o.restarts.notes],
         "frames": len(frames_log), "measure_s": round(measure_s, 3), "estimate_s": round(estimate_s, 3),
         "envelope": envelope_report,
         "trace": {"columns": ["t_s", "dh_true_m", "found", "confidence", "dh_m", "dy_m"], "rows": trace},

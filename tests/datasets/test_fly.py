@@ -399,3 +399,37 @@ def test_step_inputs_heading_is_the_offline_one_frame_by_frame():
     assert np.array_equal(np.isfinite(online), np.isfinite(offline))
     assert np.isfinite(offline).sum() > 0.8 * len(offline)
     assert np.nanmax(np.abs(online - offline)) < 1e-9
+
+
+def test_the_closed_loop_restarts_an_observer_after_a_long_gap_and_counts_its_observability_afresh():
+    """As the offline runner (visland.estimation.runner.Restarts): thesis-1's exact inputs, no
+    measurement for 15 s from t0 + 25 s; the first measurement after the gap restarts ccpi-hg-2p
+    at the height dead-reckoned since its last correction (within a metre of the flown height:
+    it had converged), and the corner motion the monitor's observability rule counts starts
+    again from 0 there."""
+    from dataclasses import replace
+
+    from tests.helpers.estimation_sims import prepared, simulation, true_height
+    from visland.datasets.fly import _Tracked
+    from visland.estimation.runner import RESTART_AFTER_S
+
+    prep = prepared()
+    dh = true_height(simulation())
+    t0 = float(prep.frame_t_s[0])
+    gap_from, gap_to = t0 + 25.0, t0 + 25.0 + RESTART_AFTER_S + 5.0
+    tracked = _Tracked("ccpi-hg-2p", 320.0, 2472.0)
+    flow_before_gap = math.nan
+    for j, inp in enumerate(prep.steps):
+        if gap_from <= inp.t_s < gap_to:
+            inp = replace(inp, points_yv=None, lines=None, center_line=None)
+        tracked.step(inp, 1.2 * dh[0])
+        if inp.t_s < gap_from:
+            flow_before_gap = tracked.depth_flow_px
+        if inp.t_s >= gap_to and inp.points_yv is not None:
+            restart_t, restart_dh, restart_flow = float(inp.t_s), tracked.dh_m, tracked.depth_flow_px
+            break
+    assert len(tracked.restarts.notes) == 1 and f"t = {restart_t:.2f} s" in tracked.restarts.notes[0]
+    frame = int(np.argmin(np.abs(prep.frame_t_s - restart_t)))
+    assert abs(restart_dh - dh[frame]) < 1.0
+    assert tracked.last_correction_s == restart_t
+    assert flow_before_gap > 10.0 and restart_flow == 0.0
