@@ -11,8 +11,10 @@ against the dataset's exact labels (labels.csv, truth.csv) with the campaign's d
 :mod:`visland.datasets.pixel_errors`), frames above 100 ft only, per distance band of
 :data:`visland.detection.accuracy.BANDS`:
 
-- found rate; gross errors (a frame reported found with its worse near corner, or its worse
-  edge, more than :data:`visland.detection.accuracy.GROSS_ERROR_PX` off); corners withheld;
+- found rate; gross errors (a frame reported found with a corner, near or far, or its worse
+  edge, more than :data:`visland.detection.accuracy.GROSS_ERROR_PX` off; the far corners count
+  since 2026-11-30: before, a runway end placed 42 px short at 0.83-0.97 confidence went
+  uncounted); corners withheld;
 - near-corner error (the worse of P', P'' per frame, px): median / p95 / max over found frames;
 - edge error (mean distance of the labelled edge's visible points to the measured line, the worse
   edge, px): median / p95;
@@ -66,7 +68,7 @@ from detection_robustness import CONDITIONS, condition_setup, heat_map  # noqa: 
 OBSERVERS = ("ccpi-hg-2p", "ekf-2l")
 #: Per-frame CSV columns.
 FRAME_FIELDS = ["condition", "frame", "t_s", "distance_m", "dh_m", "band", "above_100ft", "found", "near_px",
-                "edge_px", "dpsi_err_deg", "gross", "corners_withheld", "confidence", "reason"]
+                "far_px", "edge_px", "dpsi_err_deg", "gross", "corners_withheld", "confidence", "reason"]
 
 
 def slug(name: str) -> str:
@@ -91,11 +93,14 @@ def frame_rows(condition: str, run_dir, dataset_dir) -> list[dict]:
     list of dict
         The keys of :data:`FRAME_FIELDS`, in the schema :func:`visland.detection.accuracy.summarise`
         reads: ``near_px`` the worse near corner (NaN where not measured or a near corner is not in
-        the image), ``edge_px`` the worse edge, ``dpsi_err_deg`` measured minus true (NaN where not
-        found), ``gross`` found with a near corner or an edge more than ``GROSS_ERROR_PX`` off,
-        ``corners_withheld`` visible near corners a found frame did not report.
+        the image), ``far_px`` the worse runway-end corner measured where the label has it in the
+        image (NaN where none), ``edge_px`` the worse edge, ``dpsi_err_deg`` measured minus true
+        (NaN where not found), ``gross`` found with a corner (near or far) or an edge more than
+        ``GROSS_ERROR_PX`` off, ``corners_withheld`` visible near corners a found frame did not
+        report.
     """
     from visland.contracts import read_labels, read_measurements
+    from visland.datasets.pixel_errors import corner_errors_px
     from visland.detection.accuracy import GROSS_ERROR_PX, band_of
     run_dir, dataset_dir = Path(run_dir), Path(dataset_dir)
     e = run_errors(run_dir, dataset_dir)
@@ -103,6 +108,9 @@ def frame_rows(condition: str, run_dir, dataset_dir) -> list[dict]:
     labels = read_labels(dataset_dir / "labels.csv")
     found = e["found"]
     near = np.where(found, e["corner_px"], np.nan)
+    corners = corner_errors_px(measured, labels)              # NaN where not measured or not visible
+    with np.errstate(invalid="ignore"):
+        far = np.where(found, np.fmax(corners["far_left"], corners["far_right"]), np.nan)
     edge = np.where(found, e["edge_px"], np.nan)
     dpsi = np.where(found, measured["dpsi_deg"] - read_truth_dpsi(dataset_dir), np.nan)
     withheld = np.zeros(len(found), int)
@@ -111,14 +119,14 @@ def frame_rows(condition: str, run_dir, dataset_dir) -> list[dict]:
         unmeasured = ~np.isfinite(measured[f"{corner}_u_px"]) | ~np.isfinite(measured[f"{corner}_v_px"])
         withheld += (found & visible & unmeasured).astype(int)
     with np.errstate(invalid="ignore"):
-        gross = found & ((near > GROSS_ERROR_PX) | (edge > GROSS_ERROR_PX))
+        gross = found & ((near > GROSS_ERROR_PX) | (far > GROSS_ERROR_PX) | (edge > GROSS_ERROR_PX))
     rows = []
     for i in range(len(found)):
         rows.append({
             "condition": condition, "frame": i, "t_s": float(e["t_s"][i]),
             "distance_m": float(e["distance_m"][i]), "dh_m": float(e["dh_m"][i]),
             "band": band_of(float(e["distance_m"][i])), "above_100ft": int(e["above_100ft"][i]),
-            "found": int(found[i]), "near_px": float(near[i]), "edge_px": float(edge[i]),
+            "found": int(found[i]), "near_px": float(near[i]), "far_px": float(far[i]), "edge_px": float(edge[i]),
             "dpsi_err_deg": float(dpsi[i]), "gross": int(gross[i]), "corners_withheld": int(withheld[i]),
             "near_along_px": math.nan,
             "confidence": float(measured["confidence"][i]) if "confidence" in measured else math.nan,

@@ -4,7 +4,8 @@ measurements made from the exact labels with known errors planted: no rendering,
 The dataset files are a real simulated approach's (labels.csv, truth.csv, camera.json,
 runway.json); measurements.csv is its labels with, in chosen frames, the runway not found, a
 near corner moved (6, 8) px (10 px: a gross error), a near corner moved (0.3, 0.4) px (0.5 px:
-not gross), the near corners withheld, and dpsi 0.2 deg off."""
+not gross), the near corners withheld, dpsi 0.2 deg off, and a far corner moved (-7.2, 9.6) px
+(12 px: a gross error too, the near corners exact)."""
 import importlib.util
 import json
 import math
@@ -46,7 +47,7 @@ def folders(tmp_path_factory):
     columns["found"] = np.ones(n)
     columns["reason"] = [""] * n
     columns["confidence"] = np.ones(n)
-    lost, gross, small, withheld, dpsi = 1, 2, 3, 4, 5
+    lost, gross, small, withheld, dpsi, far = 1, 2, 3, 4, 5, 6
     for name in columns:
         if name not in ("t_s", "frame", "source", "found", "reason", "confidence") and not name.endswith("_visible"):
             columns[name][lost] = math.nan
@@ -60,9 +61,12 @@ def folders(tmp_path_factory):
         columns[name][withheld] = math.nan
     columns["near_left_visible"][withheld] = columns["near_right_visible"][withheld] = 0.0   # not reported
     columns["dpsi_deg"][dpsi] += 0.2
+    columns["far_right_u_px"][far] -= 7.2
+    columns["far_right_v_px"][far] += 9.6
     run.mkdir()
     write_csv(run / "measurements.csv", columns, MEASUREMENT_COLUMNS)
-    return dataset, run, {"lost": lost, "gross": gross, "small": small, "withheld": withheld, "dpsi": dpsi}
+    return dataset, run, {"lost": lost, "gross": gross, "small": small, "withheld": withheld, "dpsi": dpsi,
+                          "far": far}
 
 
 def test_frame_rows_find_the_planted_errors(study, folders):
@@ -80,6 +84,10 @@ def test_frame_rows_find_the_planted_errors(study, folders):
     w = rows[planted["withheld"]]
     assert w["found"] == 1 and w["corners_withheld"] == 2 and math.isnan(w["near_px"]) and w["gross"] == 0
     assert rows[planted["dpsi"]]["dpsi_err_deg"] == pytest.approx(0.2, abs=1e-9)
+    far = rows[planted["far"]]
+    assert labels["far_right_visible"][planted["far"]] == 1
+    assert far["far_px"] == pytest.approx(12.0, abs=1e-6) and far["near_px"] < 1e-6 and far["gross"] == 1
+    assert rows[planted["gross"]]["far_px"] < 1e-6
     others = [r for i, r in enumerate(rows) if i not in planted.values() and r["found"]]
     assert others and all(r["near_px"] < 1e-6 or math.isnan(r["near_px"]) for r in others)
     assert all(r["edge_px"] < 1e-3 for r in others if math.isfinite(r["edge_px"]))
@@ -97,7 +105,7 @@ def test_summary_and_verdict_count_the_planted_errors(study, folders):
     s = study.summarise_rows(rows)["all"]
     assert s["frames"] == len(above)
     assert s["found_rate"] == pytest.approx(round((len(above) - 1) / len(above), 4))
-    assert s["gross"] == 1 and s["withheld"] == 2
+    assert s["gross"] == 2 and s["withheld"] == 2
     assert s["near_corner_px"]["max"] == pytest.approx(10.0, abs=1e-3)
     (run / "metrics.json").write_text(json.dumps({"observers": {"ccpi-hg-2p": {"err_100ft_m": -0.25},
                                                                 "ekf-2l": {"err_100ft_m": None}}}))
