@@ -1282,21 +1282,14 @@ def _edges_run_on(image, end: TransverseLine, vp_uv: np.ndarray, stretch_px: flo
                   params: DetectorParams) -> float | None:
     """How far the edges run on past the runway end ``end``: for each edge, the contrast across
     it (:func:`_edge_contrast`) over ``stretch_px`` of depth beyond the end line, less the
-    ground's own there, over the edge's contrast just before the end; the smaller of the two
-    ratios. None when the stretch is too short to read (under 2 px) or the contrast before the
-    end too weak (under ``min_contrast``). Past a runway's end both edges cross the ground
-    (ratios near 0); past a step inside the pavement (rubber ending on the paler asphalt beyond
-    the touchdown zone, or on concrete as light as the grass) the pavement and its side stripes
-    still part from the ground there. Reading stops at the first edge whose ratio is below
-    ``end_run_on_ratio`` (the ground's contrast, which only lowers it, is then not read): the
-    answer is the same, at a third of the cost on the usual true end.
-
-    An edge whose ground, a runway width out, shows more contrast than the edge itself past the
-    end says nothing (another pavement there: a taxiway joining that side), and the other edge
-    decides alone; with neither readable, None. ('concrete, dry grass' at 1.5 km, tracking: the
-    end placed where the rubber ends, 42 px short at 2048 px; the right edge's ground crossed
-    the joining taxiways' edges, contrast 20 against 14 across the edge itself, a ratio of
-    -0.47, while the left edge ran on at 0.71.)"""
+    ground's own a runway width farther out, over the edge's contrast just before the end; the
+    smaller of the two ratios. None when the stretch is too short to read (under 2 px) or the
+    contrast before the end too weak (under ``min_contrast``). Past a runway's end both edges
+    cross the ground (ratios near 0); past a step inside the pavement (rubber ending on the
+    paler asphalt beyond the touchdown zone, or on concrete as light as the grass) the pavement
+    and its side stripes still part from the ground there. Reading stops at the first edge whose
+    ratio is below ``end_run_on_ratio`` (the ground's contrast, which only lowers it, is then
+    not read): the answer is the same, at a third of the cost on the usual true end."""
     depth = end.depth_px
     if not (math.isfinite(depth) and depth > stretch_px + 1.0 and stretch_px >= 2.0):
         return None
@@ -1308,7 +1301,7 @@ def _edges_run_on(image, end: TransverseLine, vp_uv: np.ndarray, stretch_px: flo
         corner = np.asarray(corner, float)
         return np.array([vp + (corner - vp) * (d_from / depth), vp + (corner - vp) * (d_to / depth)])
 
-    edges = []
+    smallest = math.inf
     for corner, other in ((end.corner_left_uv, end.corner_right_uv), (end.corner_right_uv, end.corner_left_uv)):
         before = _edge_contrast(image, stretch(corner, depth + 1.0, depth + 1.0 + stretch_px),
                                 stretch(other, depth + 1.0, depth + 1.0 + stretch_px), params)
@@ -1319,15 +1312,13 @@ def _edges_run_on(image, end: TransverseLine, vp_uv: np.ndarray, stretch_px: flo
             return None
         if beyond / before < params.end_run_on_ratio:
             return beyond / before
-        edges.append((before, beyond, edge_beyond, other_beyond))
-    # the same rows a runway width farther out: the ground's own contrast there (a road
-    # crossing past the end, fields in bands near the horizon, read across a slanted edge)
-    ratios = []
-    for before, beyond, edge_beyond, other_beyond in edges:
+        # the same rows a runway width farther out: the ground's own contrast there (a road
+        # crossing past the end, fields in bands near the horizon, read across a slanted edge)
         ground = _edge_contrast(image, edge_beyond, other_beyond, params, offset_widths=1.0)
-        if math.isfinite(ground) and ground <= beyond:
-            ratios.append((beyond - ground) / before)
-    return min(ratios) if ratios else None
+        if not math.isfinite(ground):
+            return None
+        smallest = min(smallest, (beyond - ground) / before)
+    return smallest
 
 
 def _edge_contrast(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams,
