@@ -40,7 +40,7 @@ from visland.detection.result import DetectionResult, not_found
 from visland.detection.threshold_marking import (ground_begins, marked_at_start, paint_before,
                                                  starts_on_its_stripes, threshold_marking)
 from visland.detection.transverse import (TransverseLine, find_transverse_line, pavement_beyond_edges,
-                                          surface_extent)
+                                          pavement_runs_on, surface_extent)
 from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
                                          wider_strip_beside)
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
@@ -1500,6 +1500,15 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             notes.append(f"runway end withheld: both edges run on past the step found (the contrast across them "
                          f"there {ratio:.2f} of theirs before it or more)")
             far, far_withheld = None, True
+    if far is not None and far.spans and ctx.colour is not None and pavement_runs_on(
+            ctx.colour, horizon, s0_vp, fits["left"].line, fits["right"].line, far.depth_px, -1,
+            max(3.0, params.end_past_edges_fraction * depth_span), params):
+        # the grey pavement runs on past the step, where the ground beside is coloured (concrete
+        # as light as dry grass, its rubber ending: the edges' contrast past it read beside
+        # joining taxiways, or over 2 px only at 1024 px, did not withhold it; far corners
+        # 42 px short at 2048 px, 19-23 px at 1024)
+        notes.append("runway end withheld: the pavement's grey runs on past the step found, between coloured ground")
+        far, far_withheld = None, True
     marking_widths = math.nan
     if near is not None:
         # a step inside the pavement (a patch's edge, the stripes' inner edge) is not where the

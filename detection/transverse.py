@@ -724,6 +724,92 @@ def pavement_beyond_edges(image, horizon: HorizonFrame, s0: float, left: PixelLi
     return tuple(sides)
 
 
+#: Past a step inside the pavement the chroma between the edges stays within this share of the
+#: pavement-to-ground chroma step of the pavement's own (:func:`pavement_runs_on`).
+PAVEMENT_RUN_ON_SHARE = 0.25
+
+
+def pavement_runs_on(colour, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine, depth: float,
+                     outward: int, band_px: float, params: DetectorParams | None = None) -> bool | None:
+    """Does the pavement run on past the transverse line at ``depth``, in the chroma?
+
+    Pavement is grey, grass and fields are not. Past a runway's end (``outward`` -1: farther,
+    smaller depths) the surface between the edges becomes the ground; past a step inside the
+    pavement (where the touchdown zone's rubber ends, on concrete as light as dry grass) it is
+    still pavement. On the transverse lines through V2 (:func:`transverse_grid`) from 1 to
+    ``1 + band_px`` depth pixels either side of the line: the chroma between the edges (the
+    middle of the width, ``transverse_column_span``) before the line and past it, and the ground's
+    a runway width out beside either edge past it. True when the ground on both sides differs from
+    the pavement before the line by ``params.transverse_chroma_min_step`` or more and the chroma
+    past the line stays within :data:`PAVEMENT_RUN_ON_SHARE` of the smaller of those steps of the
+    pavement's; False when it does not; None when the chroma cannot tell (the ground as grey as the
+    pavement on a side, or too little of the bands in the frame).
+
+    Parameters
+    ----------
+    colour : ndarray of uint8, shape (H, W, 3)
+        The RGB frame.
+    horizon : HorizonFrame
+        Horizon of the frame.
+    s0 : float
+        The runway's vanishing point V1 on the horizon, pixels from Q.
+    left, right : PixelLine
+        The refined left and right edges.
+    depth : float
+        Depth (pixels below the horizon) where the transverse line crosses the centre line.
+    outward : int
+        +1 for the threshold (outside at larger depth), -1 for the runway end.
+    band_px : float
+        Depth pixels read on each side of the line (past the first).
+    params : DetectorParams, optional
+        ``transverse_column_span``, ``transverse_chroma_min_step``.
+
+    Returns
+    -------
+    bool or None
+    """
+    params = params or DetectorParams()
+    line_left, line_right = left.homogeneous(), right.homogeneous()
+    d_ref = max(float(depth), 1.0)
+    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_ref)
+    if not (math.isfinite(s_left) and math.isfinite(s_right)) or not band_px > 0:
+        return None
+    k_centre = (0.5 * (s_left + s_right) - s0) / d_ref
+    offsets = np.arange(1.0, 1.0 + band_px + 1e-9, 0.5)
+    depths = np.concatenate([depth - outward * offsets, depth + outward * offsets])     # before, then past
+    if depths.min() <= 0.5:
+        return None
+    n = len(offsets)
+    groups = {"inside": np.linspace(*params.transverse_column_span, 8), "left": np.linspace(-1.5, -0.5, 8),
+              "right": np.linspace(1.5, 2.5, 8)}
+    fractions = np.concatenate(list(groups.values()))
+    _, _, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths, fractions,
+                                         colour.shape)
+    if not inside.any():
+        return None
+    height, width = colour.shape[:2]
+    u0 = int(max(0, math.floor(grid[..., 0][inside].min()) - 1))
+    v0 = int(max(0, math.floor(grid[..., 1][inside].min()) - 1))
+    u1 = int(min(width, math.ceil(grid[..., 0][inside].max()) + 2))
+    v1 = int(min(height, math.ceil(grid[..., 1][inside].max()) + 2))
+    maps = (np.where(inside, grid[..., 0] - u0, -10.0).astype(np.float32),
+            np.where(inside, grid[..., 1] - v0, -10.0).astype(np.float32))
+    values = _transverse_values(chroma_of(colour[v0:v1, u0:u1]), maps, inside)
+    means = {}
+    for g, name in enumerate(groups):
+        for side, rows in (("before", slice(0, n)), ("past", slice(n, 2 * n))):
+            block = values[rows, 8 * g:8 * (g + 1)]
+            finite = np.isfinite(block)
+            if finite.sum() < 0.5 * block.size:
+                return None
+            means[name, side] = float(block[finite].mean())
+    pavement = means["inside", "before"]
+    ground_step = min(abs(means["left", "past"] - pavement), abs(means["right", "past"] - pavement))
+    if ground_step < params.transverse_chroma_min_step:
+        return None
+    return abs(means["inside", "past"] - pavement) <= PAVEMENT_RUN_ON_SHARE * ground_step
+
+
 def _transition(profile, depths, depth, outward, reach: float = 3.0) -> float:
     """Mean of ``profile`` from 1 to ``reach`` px outside ``depth`` minus that 1 to ``reach`` px inside."""
     u = (depths - depth) * outward
