@@ -578,6 +578,19 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
                           step=step, significance=significance, method=method, spans=spans)
 
 
+def _crop_of(grid, inside, image_shape):
+    """The frame's crop around the samples ``grid`` that are ``inside`` it, ``(v0, v1, u0, u1)``,
+    and the samples' maps into that crop for :func:`_transverse_values` (outside ones off it)."""
+    height, width = image_shape[:2]
+    u0 = int(max(0, math.floor(grid[..., 0][inside].min()) - 1))
+    v0 = int(max(0, math.floor(grid[..., 1][inside].min()) - 1))
+    u1 = int(min(width, math.ceil(grid[..., 0][inside].max()) + 2))
+    v1 = int(min(height, math.ceil(grid[..., 1][inside].max()) + 2))
+    maps = (np.where(inside, grid[..., 0] - u0, -10.0).astype(np.float32),
+            np.where(inside, grid[..., 1] - v0, -10.0).astype(np.float32))
+    return (v0, v1, u0, u1), maps
+
+
 def pavement_beyond_edges(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                           depth: float, outward: int, colour=None, surface_level: float = math.nan,
                           params: DetectorParams | None = None) -> tuple[str, ...]:
@@ -659,13 +672,7 @@ def pavement_beyond_edges(image, horizon: HorizonFrame, s0: float, left: PixelLi
     _, _, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths, fractions, image.shape)
     if not inside.any():
         return ()
-    height, width = image.shape[:2]
-    u0 = int(max(0, math.floor(grid[..., 0][inside].min()) - 1))
-    v0 = int(max(0, math.floor(grid[..., 1][inside].min()) - 1))
-    u1 = int(min(width, math.ceil(grid[..., 0][inside].max()) + 2))
-    v1 = int(min(height, math.ceil(grid[..., 1][inside].max()) + 2))
-    maps = (np.where(inside, grid[..., 0] - u0, -10.0).astype(np.float32),
-            np.where(inside, grid[..., 1] - v0, -10.0).astype(np.float32))
+    (v0, v1, u0, u1), maps = _crop_of(grid, inside, image.shape)
 
     n_inner, n_outer = int(inner_band.sum()), int(outer_band.sum())
     names = list(groups)
@@ -787,13 +794,7 @@ def pavement_runs_on(colour, horizon: HorizonFrame, s0: float, left: PixelLine, 
                                          colour.shape)
     if not inside.any():
         return None
-    height, width = colour.shape[:2]
-    u0 = int(max(0, math.floor(grid[..., 0][inside].min()) - 1))
-    v0 = int(max(0, math.floor(grid[..., 1][inside].min()) - 1))
-    u1 = int(min(width, math.ceil(grid[..., 0][inside].max()) + 2))
-    v1 = int(min(height, math.ceil(grid[..., 1][inside].max()) + 2))
-    maps = (np.where(inside, grid[..., 0] - u0, -10.0).astype(np.float32),
-            np.where(inside, grid[..., 1] - v0, -10.0).astype(np.float32))
+    (v0, v1, u0, u1), maps = _crop_of(grid, inside, colour.shape)
     values = _transverse_values(chroma_of(colour[v0:v1, u0:u1]), maps, inside)
     means = {}
     for g, name in enumerate(groups):
