@@ -385,11 +385,13 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
         read_measurements(staging / "measurements.csv")       # what we hand on reads back cleanly
         not_started: dict = {}
         diverged: dict = {}
+        restarted: dict = {}
         calibration: dict = {}
         metrics = estimate_folder(staging, _with_measurements(estimate_options, staging / "measurements.csv"),
                                   staging / "estimates.csv",
                                   echo=lambda line: echo(line.replace(str(staging), str(out_dir))),
-                                  not_started=not_started, diverged=diverged, calibration_out=calibration)
+                                  not_started=not_started, diverged=diverged, calibration_out=calibration,
+                                  restarted=restarted)
         deviations = _deviation_errors(source.truth, staging / "estimates.csv") if source.truth is not None else {}
         if metrics:
             doc = json.loads((staging / "metrics.json").read_text())
@@ -415,6 +417,8 @@ def _write_run(source, measurements, options, estimate_options, input_path, out_
             "no_estimates": not_started,
             # observers cut off when they diverged (estimates withheld from then on), and when
             "diverged": diverged,
+            # observers restarted after a long gap without a measurement, when and from what height
+            "restarted": restarted,
             # the camera mounting's error and the runway's slope estimated from the runway
             # (visland.estimation.calibration), applied with --self-calibration, else reported only
             "self_calibration": calibration.get("summary"),
@@ -476,6 +480,8 @@ def _write_report(folder: Path, source, measurements, metrics, deviations, run) 
         summary.append((f"{observer}: no estimates", why))
     for observer, why in run.get("diverged", {}).items():
         summary.append((f"{observer}: DIVERGED", why))
+    for observer, sentences in run.get("restarted", {}).items():
+        summary.append((f"{observer}: restarted", "; ".join(sentences)))
     write_report(folder / "report.html", title=f"visland run: {run['scenario'] or Path(run['input']).name} "
                                                f"({run['source']})",
                  summary_rows=summary, measurements=columns, estimates=dict(estimates),

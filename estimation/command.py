@@ -150,7 +150,8 @@ def _read_inputs(folder: Path, measurements: str):
 
 
 def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_started: dict | None = None,
-                    diverged: dict | None = None, calibration_out: dict | None = None) -> dict:
+                    diverged: dict | None = None, calibration_out: dict | None = None,
+                    restarted: dict | None = None) -> dict:
     """Run ``options.observers`` on ``folder``; write ``out_path`` (and metrics.json with truth).
 
     Returns the metrics per observer (empty without truth). An observer that cannot start
@@ -158,7 +159,8 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_
     cell empty and coasting = 1; why it did not start is echoed and, when ``not_started`` is a
     dict, stored there under its name. An observer that diverged (cut off by
     :func:`visland.estimation.runner.run_observer`) is echoed likewise and, when ``diverged`` is a
-    dict, its sentence stored there. The mounting's self-calibration (``options.self_calibration``
+    dict, its sentence stored there; an observer restarted after a long gap, its sentences in
+    ``restarted`` (a list per name). The mounting's self-calibration (``options.self_calibration``
     "check" or "apply") is echoed and, when ``calibration_out`` is a dict, its summary and sentence
     stored there (``summary``, ``describe``).
 
@@ -172,7 +174,7 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_
         The ``estimates.csv`` to write.
     echo : callable, default print
         Where the progress lines go.
-    not_started, diverged, calibration_out : dict, optional
+    not_started, diverged, calibration_out, restarted : dict, optional
         Filled as described above.
 
     Returns
@@ -256,6 +258,8 @@ def estimate_folder(folder, options: EstimateOptions, out_path, echo=print, not_
                 f"{1e6 * run.step_time_s / max(run.n_steps, 1):.0f} us/step")
         for note in run.notes:
             echo(f"{name}: {note}")
+        if run.restarts and restarted is not None:
+            restarted[name] = list(run.restarts)
         if run.diverged:
             echo(f"{name}: {run.diverged}")
             if diverged is not None:

@@ -85,6 +85,8 @@ class ObserverRun:
         When the height started sitting on its bound (NaN: never).
     diverged : str
         One sentence when it diverged, empty otherwise.
+    restarts : list of str
+        One sentence per restart after a long gap (:class:`Restarts`; also in ``notes``).
     """
 
     observer: str
@@ -107,6 +109,7 @@ class ObserverRun:
     notes: list = field(default_factory=list)
     diverged_t_s: float = math.nan
     diverged: str = ""
+    restarts: list = field(default_factory=list)
 
     def __len__(self):
         return len(self.t_s)
@@ -307,7 +310,7 @@ def run_observer(observer: Observer, prepared: PreparedInputs, dh0_m: float,
                        start_t_s=float(steps[start].t_s), dh0_m=float(dh0_m), step_time_s=elapsed,
                        n_steps=n_steps, params=params, extras=extras,
                        notes=list(getattr(observer, "notes", ())) + restart.notes, diverged_t_s=diverged_t_s,
-                       diverged=diverged,
+                       diverged=diverged, restarts=list(restart.notes),
                        **out)
 
 

@@ -324,3 +324,43 @@ def read_estimates_rows(path, observer):
     table = read_estimates(path)
     keep = table["observer"] == observer
     return {k: np.asarray(table[k][keep], dtype=float) for k in ("t_s", "dh_m", "coasting")}
+
+
+# ------------------------------------------- a long gap without measurements: the observer is restarted
+@pytest.mark.slow
+def test_an_observer_restarted_after_a_long_gap_is_said_to_be_in_the_log_run_json_and_the_report(simulated, tmp_path,
+                                                                                                 capsys):
+    """thesis-3 with its exact features, none from 20 to 35 s (the runway lost for 15 s): the observers are
+    restarted at the first frame after the gap from the height dead-reckoned since their last correction
+    (visland.estimation.runner.Restarts), and the log, run.json ("restarted") and the report say when."""
+    folder = tmp_path / "gap"
+    shutil.copytree(simulated, folder)
+    lines = (folder / "labels.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    t_col = header.index("t_s")
+    emptied = [i for i, c in enumerate(header) if c.endswith(("_px", "_rho", "_theta_rad")) or c in ("dpsi_deg",)]
+    hidden = [i for i, c in enumerate(header) if c.endswith("_visible")]
+    for k in range(1, len(lines)):
+        cells = lines[k].split(",")
+        if 20.0 <= float(cells[t_col]) < 35.0:
+            for i in emptied:
+                cells[i] = ""
+            for i in hidden:
+                cells[i] = "0"
+            lines[k] = ",".join(cells)
+    (folder / "labels.csv").write_text("\n".join(lines) + "\n")
+    run = tmp_path / "run"
+    assert main(["process", str(folder), "--out", str(run), "--source", "ideal", "--observer", "ccpi-hg-2p",
+                 "ekf-2l"]) == 0
+    out = capsys.readouterr().out
+    said = re.search(r"ccpi-hg-2p: restarted at t = (35\.\d\d) s, 15\.\d s after its last measurement, from the "
+                     r"height dead-reckoned since its last correction \(([\d.]+) m\)", out)
+    assert said, out[-2000:]
+    info = json.loads((run / "run.json").read_text())
+    assert set(info["restarted"]) == {"ccpi-hg-2p", "ekf-2l"}
+    assert info["restarted"]["ccpi-hg-2p"] == [said.group(0).split("ccpi-hg-2p: ", 1)[1]]
+    assert "ccpi-hg-2p: restarted" in (run / "report.html").read_text()
+    # converged before the gap, so the height carried through it is within a metre of the truth
+    truth = np.genfromtxt(folder / "truth.csv", delimiter=",", names=True)
+    k = int(np.argmin(np.abs(truth["t_s"] - float(said.group(1)))))
+    assert abs(float(said.group(2)) - truth["dh_m"][k]) < 1.0
