@@ -43,11 +43,13 @@ def run_errors(run_dir: Path, dataset_dir: Path) -> dict:
     visible = (labels["near_left_visible"] > 0.5) & (labels["near_right_visible"] > 0.5)
     corners = corner_errors_px(measured, labels)
     corner = np.where(visible, np.fmax(corners["near_left"], corners["near_right"]), np.nan)   # the worse of P', P''
+    with np.errstate(invalid="ignore"):
+        far = np.fmax(corners["far_left"], corners["far_right"])     # the worse runway-end corner (NaN: none)
     edges = np.fmax(*edge_errors_px(measured, labels, camera).values())                      # the worse edge
     dpsi = np.abs(measured["dpsi_deg"] - truth["dpsi_deg"])
     above = truth["dh_m"] >= 100 * FT_TO_M
     return {"t_s": truth["t_s"], "distance_m": distance, "dh_m": truth["dh_m"], "found": measured["found"] > 0.5,
-            "corner_px": corner, "edge_px": edges, "dpsi_deg": dpsi, "above_100ft": above}
+            "corner_px": corner, "far_px": far, "edge_px": edges, "dpsi_deg": dpsi, "above_100ft": above}
 
 
 def _q(x, k):

@@ -100,7 +100,6 @@ def frame_rows(condition: str, run_dir, dataset_dir) -> list[dict]:
         report.
     """
     from visland.contracts import read_labels, read_measurements
-    from visland.datasets.pixel_errors import corner_errors_px
     from visland.detection.accuracy import GROSS_ERROR_PX, band_of
     run_dir, dataset_dir = Path(run_dir), Path(dataset_dir)
     e = run_errors(run_dir, dataset_dir)
@@ -108,9 +107,7 @@ def frame_rows(condition: str, run_dir, dataset_dir) -> list[dict]:
     labels = read_labels(dataset_dir / "labels.csv")
     found = e["found"]
     near = np.where(found, e["corner_px"], np.nan)
-    corners = corner_errors_px(measured, labels)              # NaN where not measured or not visible
-    with np.errstate(invalid="ignore"):
-        far = np.where(found, np.fmax(corners["far_left"], corners["far_right"]), np.nan)
+    far = np.where(found, e["far_px"], np.nan)
     edge = np.where(found, e["edge_px"], np.nan)
     dpsi = np.where(found, measured["dpsi_deg"] - read_truth_dpsi(dataset_dir), np.nan)
     withheld = np.zeros(len(found), int)

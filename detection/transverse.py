@@ -383,6 +383,14 @@ def transverse_grid(horizon: HorizonFrame, s0: float, k_centre: float, line_left
     return ends_left, ends_right, grid, inside
 
 
+def _centre_at(horizon: HorizonFrame, s0: float, line_left: np.ndarray, line_right: np.ndarray, depth: float):
+    """Where the edges cross the line parallel to the horizon at ``depth`` (at least 1 px) and the
+    centre line's slope through V1 there: ``(s_left, s_right, d_ref, k_centre)``."""
+    d_ref = max(float(depth), 1.0)
+    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_ref)
+    return s_left, s_right, d_ref, (0.5 * (s_left + s_right) - s0) / d_ref
+
+
 def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLine, right: PixelLine,
                          d_expected: float, d_window: tuple, outward: int, min_step: float,
                          n_columns: int | None = None, step_d_px: float = 0.5,
@@ -473,9 +481,7 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
         return None
     line_left, line_right = left.homogeneous(), right.homogeneous()
     # the centre line: through V1, midway between the edges along lines parallel to the horizon
-    d_ref = max(d_expected, 1.0)
-    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_ref)
-    k_centre = (0.5 * (s_left + s_right) - s0) / d_ref
+    s_left, s_right, d_ref, k_centre = _centre_at(horizon, s0, line_left, line_right, d_expected)
     depths = np.arange(d_min, d_max + 1e-9, step_d_px)
     fractions = np.linspace(*params.transverse_column_span, n_columns)
     ends_left, ends_right, grid, inside = transverse_grid(horizon, s0, k_centre, line_left, line_right, depths,
@@ -648,11 +654,9 @@ def pavement_beyond_edges(image, horizon: HorizonFrame, s0: float, left: PixelLi
     """
     params = params or DetectorParams()
     line_left, line_right = left.homogeneous(), right.homogeneous()
-    d_ref = max(float(depth), 1.0)
-    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_ref)
+    s_left, s_right, d_ref, k_centre = _centre_at(horizon, s0, line_left, line_right, depth)
     if not (math.isfinite(s_left) and math.isfinite(s_right)):
         return ()
-    k_centre = (0.5 * (s_left + s_right) - s0) / d_ref
     # the depth one runway width spans there (k = W / h, the edges' slope difference)
     width_px = depth - depth_along(horizon.camera.fx, depth, 1.0, abs(s_right - s_left) / d_ref)
     if not width_px >= params.crossing_pavement_min_width_px:
@@ -777,11 +781,9 @@ def pavement_runs_on(colour, horizon: HorizonFrame, s0: float, left: PixelLine, 
     """
     params = params or DetectorParams()
     line_left, line_right = left.homogeneous(), right.homogeneous()
-    d_ref = max(float(depth), 1.0)
-    s_left, s_right = edge_crossings_s(horizon, line_left, line_right, d_ref)
+    s_left, s_right, _, k_centre = _centre_at(horizon, s0, line_left, line_right, depth)
     if not (math.isfinite(s_left) and math.isfinite(s_right)) or not band_px > 0:
         return None
-    k_centre = (0.5 * (s_left + s_right) - s0) / d_ref
     offsets = np.arange(1.0, 1.0 + band_px + 1e-9, 0.5)
     depths = np.concatenate([depth - outward * offsets, depth + outward * offsets])     # before, then past
     if depths.min() <= 0.5:
