@@ -1502,11 +1502,13 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             far, far_withheld = None, True
     if far is not None and far.spans and ctx.colour is not None and pavement_runs_on(
             ctx.colour, horizon, s0_vp, fits["left"].line, fits["right"].line, far.depth_px, -1,
-            max(3.0, params.end_past_edges_fraction * depth_span), params):
+            params.end_chroma_band_px, params):
         # the grey pavement runs on past the step, where the ground beside is coloured (concrete
         # as light as dry grass, its rubber ending: the edges' contrast past it read beside
         # joining taxiways, or over 2 px only at 1024 px, did not withhold it; far corners
-        # 42 px short at 2048 px, 19-23 px at 1024)
+        # 42 px short at 2048 px, 19-23 px at 1024); read over a few pixels past it, as the reciprocal
+        # runway's touchdown-zone paint taken for the end leaves only 5-6 px of pavement before
+        # the true end at 2.8 km, 2048 px: far corners 5.4-6.9 px off)
         notes.append("runway end withheld: the pavement's grey runs on past the step found, between coloured ground")
         far, far_withheld = None, True
     marking_widths = math.nan

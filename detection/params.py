@@ -696,6 +696,14 @@ class DetectorParams(ParamsFile):
         light as the grass), past the true end within 0.1 of 0 (no rubber), once -0.37; on
         visland's 'oblique, 1200x23' frame at 450 m, a road crossing just past the end, 0.63
         and 0.60 without the ground's subtracted, 0.21 and -0.36 with it.
+    end_chroma_band_px : float
+        In a colour frame, a runway end is withheld when the chroma between the edges from 1 to
+        1 + this many depth pixels past it stays the pavement's while the ground beside both
+        edges differs (:func:`visland.detection.transverse.pavement_runs_on`). Short, so that
+        it reads the pavement left between a false end and the true one: the reciprocal
+        runway's touchdown-zone or aiming-point paint taken for the end, 400-450 m short, leaves
+        5-6 px of pavement before the grass at 2.8 km and 2048 px ('16 stripes, 30 m wide',
+        'variety 1'); a band of 13 px read mostly the grass beyond and did not withhold it.
     border_clearance_px : float
         Edges supported to within this depth of the image bottom reach its border (a threshold
         not found is then below the image).
@@ -1116,6 +1124,7 @@ class DetectorParams(ParamsFile):
     threshold_window_depth_fraction: float = 0.1
     end_past_edges_fraction: float = 0.1
     end_run_on_ratio: float = 0.3
+    end_chroma_band_px: float = 3.0
     border_clearance_px: float = 3.0
     threshold_exit_margin_px: float = 2.0
     pavement_search_fraction: float = 0.5
@@ -1290,6 +1299,7 @@ class DetectorParams(ParamsFile):
         "centre_min_width_px": (0.5, 1000.0), "centre_image_margin_px": (0.0, 1000.0),
         "centre_min_support": (0.0, 1.0), "centre_bright_support": (0.0, 1.0),
         "threshold_window_min_px": (0.0, 10000.0), "threshold_window_depth_fraction": (0.0, 10.0), "end_past_edges_fraction": (0.0, 10.0), "end_run_on_ratio": (0.0, 1e6),
+        "end_chroma_band_px": (0.5, 1000.0),
         "border_clearance_px": (0.0, 1000.0), "threshold_exit_margin_px": (0.0, 1000.0),
         "pavement_search_fraction": (0.0, 10.0), "pavement_search_px": (0.0, 10000.0), "pavement_search_extend": (1.0, 100.0),
         "pavement_min_move_px": (0.0, 1000.0), "pavement_window_px": (0.5, 1000.0),

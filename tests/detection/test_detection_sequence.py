@@ -15,8 +15,9 @@ CAMERA = CameraModel.default(2048)
 ONE_FRAME = DetectorParams(new_track_frames=1)
 
 
-def _result(theta_left=0.30, theta_right=-0.30, dF=10.0, near_v=1500.0, width=80.0, mode="tracking"):
-    corners = np.array([[1000.0 - width / 2, near_v], [1000.0 + width / 2, near_v], [990.0, 1100.0], [1010.0, 1100.0]])
+def _result(theta_left=0.30, theta_right=-0.30, dF=10.0, near_v=1500.0, width=80.0, mode="tracking", far_width=20.0):
+    corners = np.array([[1000.0 - width / 2, near_v], [1000.0 + width / 2, near_v],
+                        [1000.0 - far_width / 2, 1100.0], [1000.0 + far_width / 2, 1100.0]])
     return DetectionResult(found=True, reason="", confidence=0.9, corners_uv=corners,
                            corners_found=np.ones(4, dtype=bool),
                            lines={"left": (0.01, theta_left), "right": (-0.01, theta_right), "center": (0.0, 0.0)},
@@ -141,6 +142,27 @@ def test_a_threshold_narrower_than_one_just_accepted_is_withheld(scripted):
         if not kept:
             assert "narrower than the 444.0 px accepted 0.2 s earlier" in results[2].reason
             assert results[2].found and results[2].corners_found[2:].all()    # the edges stay
+
+
+def test_a_runway_end_narrower_than_one_just_accepted_is_withheld(scripted):
+    # flying toward it the runway end's width f W / (x + L) only grows: 1024 px at dusk, 290 m
+    # from the threshold, the haze near the horizon (8.5 px above the true end) was taken for the
+    # end, 5.2 px wide a second after a 16 px end (the robustness study, far corners 9-10 px off)
+    length_m, width_m = 3000.0, 45.0
+    x = 400.0 - 70.0 * 0.2 * np.arange(6)
+    far_widths = CAMERA.fx * width_m / (x + length_m)
+    script = [_result(far_width=w) for w in far_widths[:4]] + [_result(far_width=5.2), _result(far_width=far_widths[5])]
+    for memory, kept in ((5.0, False), (0.0, True)):
+        scripted(list(script))
+        params = replace(ONE_FRAME, threshold_shrink_memory_s=memory)
+        results = _run(seq_module.DetectionSequence(CAMERA, params=params), 6, dt=0.2)
+        assert all(r.corners_found[2:].all() for r in results[:4])
+        assert bool(results[4].corners_found[2:].all()) == kept
+        assert results[5].corners_found[2:].all()             # the true end again, wider still
+        if not kept:
+            assert "runway end withheld: 5.2 px wide, narrower than the" in results[4].reason
+            assert results[4].found and results[4].corners_found[:2].all()    # the threshold stays
+            assert not np.isfinite(results[4].end_line[0]) and np.isnan(results[4].corners_uv[2:]).all()
 
 
 def test_a_new_track_replaces_a_wrong_one_after_three_agreeing_rejections(scripted):

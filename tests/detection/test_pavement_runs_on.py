@@ -58,6 +58,16 @@ def test_past_the_runway_end_the_ground_begins(band_px):
     assert pavement_runs_on(image, horizon, S0, left, right, STEP_D, -1, band_px, params) is False
 
 
+def test_a_few_pixels_of_pavement_before_the_true_end_are_read():
+    # the reciprocal runway's aiming-point paint taken for the end: 5.5 px of pavement past it,
+    # then the grass ('16 stripes, 30 m wide' and 'variety 1' at 2048 px, 2.8 km): the default
+    # band reads the pavement; one of 12.7 px (the edges' run-on stretch there) reads mostly the
+    # grass and does not see it
+    image, horizon, left, right, params = _frame(DRY_GRASS, far_end_d=STEP_D - 5.5)
+    assert pavement_runs_on(image, horizon, S0, left, right, STEP_D, -1, params.end_chroma_band_px, params) is True
+    assert pavement_runs_on(image, horizon, S0, left, right, STEP_D, -1, 12.7, params) is False
+
+
 def test_grey_ground_cannot_tell():
     image, horizon, left, right, params = _frame((140, 140, 140), far_end_d=40.0)
     assert pavement_runs_on(image, horizon, S0, left, right, STEP_D, -1, 4.0, params) is None
