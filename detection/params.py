@@ -325,6 +325,13 @@ class DetectorParams(ParamsFile):
         stripes and the strip before them: 36 m on a 45 m runway): the runway's surface carries
         on across such a band of blended markings, and the threshold is searched that far beyond
         where the surface seems to end (:func:`transverse.find_transverse_line`).
+    marking_band_max_widths : float
+        Where the chroma tells the pavement from the ground, the threshold (runway end) is also
+        searched this many runway widths past where the surface seemed to end, if the chroma
+        stays the pavement's up to the step (:func:`transverse.find_transverse_line`): markings
+        are as long in metres on any runway, so they reach more widths on a narrow one (16
+        stripes and the designation on a 30 m runway at 3.3 km, 2048 px: the surface seemed to
+        end 3.1 widths inside the threshold).
     transverse_columns, transverse_column_span : int, tuple of 2 float
         The threshold and the runway's end are searched on transverse lines sampled at this many
         points between these fractions of the width ...
@@ -990,6 +997,7 @@ class DetectorParams(ParamsFile):
     surface_rect_columns: int = 96
     surface_width_samples: float = 50.0
     marking_band_widths: float = 1.2
+    marking_band_max_widths: float = 4.0
     transverse_columns: int = 48
     transverse_column_span: tuple = (0.1, 0.9)
     transverse_min_significance: float = 2.5
@@ -1242,7 +1250,7 @@ class DetectorParams(ParamsFile):
         "strip_end_rows": (1, 1000, "int"), "surface_min_contrast": (0.0, 255.0),
         "surface_resume_fraction": (0.0, 1.0), "surface_resume_rows": (1, 1000, "int"),
         "surface_side_margin": (0.0, 10.0), "surface_rect_columns": (8, 10000, "int"),
-        "surface_width_samples": (1.0, 10000.0), "marking_band_widths": (0.0, 100.0),
+        "surface_width_samples": (1.0, 10000.0), "marking_band_widths": (0.0, 100.0), "marking_band_max_widths": (0.0, 100.0),
         "transverse_columns": (8, 10000, "int"), "transverse_column_span": (0.0, 1.0), "transverse_min_significance": (0.0, 100.0),
         "transverse_chroma_min_step": (0.0, 255.0), "transverse_inner_px": (0.0, 1000.0), "transverse_inner_fraction": (0.0, 1.0),
         "transverse_outer_px": (0.0, 1000.0), "transverse_outer_fraction": (0.0, 1.0),

@@ -565,6 +565,17 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
             # the boundary lies at or beyond the grey step (which may be the stripes' inner edge)
             d_from = depths[chosen] if chosen is not None else d_expected
             pick = chroma.pick_rising(min_significance, min_chroma_step, d_from, inner, outer, outward)
+            if pick is None:
+                # threshold markings are as long in metres on any runway: in runway widths they
+                # reach farther on a narrow one (16 stripes on 30 m at 3.3 km, 2048 px: the
+                # surface seemed to end 3.1 widths, 4.9 px, inside the threshold, past the reach
+                # of a 45 m runway's band, and the grey step placed it 2.4-2.7 px short). Looked
+                # for farther, the chroma staying the pavement's up to the step (pavement and
+                # paint are grey; a step past a change to the ground's colour is the ground's)
+                outer_max = max(outer, params.marking_band_max_widths * width_s * d_expected / horizon.camera.fx + 1.0)
+                far_pick = chroma.pick_rising(min_significance, min_chroma_step, d_from, inner, outer_max, outward)
+                if far_pick is not None and chroma.level_until(d_from, far_pick, 0.5 * min_chroma_step, outward):
+                    pick = far_pick
             if pick is not None:
                 best = (chroma, pick)
     if best is not None and best[0] is not grey:
@@ -1002,12 +1013,16 @@ class _StepProfile:
         return int(peaks[np.argmax(score)])
 
     def pick_rising(self, min_significance, min_change, d_from, inner, outer, outward) -> int | None:
-        """The strongest step rising towards the outside from ``d_from - inner`` to
-        ``d_expected + outer``, if the profile changes by ``min_change`` across it."""
+        """The strongest step rising towards the outside from ``d_from - inner`` to ``outer``
+        beyond ``d_expected`` or beyond ``d_from`` where that lies outside it (the grey step can
+        be the inner edge of a band of blended stripes that reaches ``outer`` past it: 16 stripes
+        on a 30 m runway at 3.4 km, 2048 px, the surface seemed to end 0.8 px inside that edge and
+        the band's outer edge, the threshold, lay 0.2 px past ``d_expected + outer``), if the
+        profile changes by ``min_change`` across it."""
         peaks = self._peaks(min_significance, 0.0)
         peaks = peaks[np.sign(self.g[peaks]) == outward]
         lo = (d_from - self.d_expected) * outward - inner
-        hi = max(outer, lo + 2.0 * inner)
+        hi = max(outer + max(0.0, lo + inner), lo + 2.0 * inner)
         beyond = (self.depths[peaks] - self.d_expected) * outward
         peaks = peaks[(beyond >= lo) & (beyond <= hi)]
         if len(peaks) == 0:
@@ -1017,6 +1032,14 @@ class _StepProfile:
         before = self.smooth[max(0, chosen - reach)]
         after = self.smooth[min(len(self.smooth) - 1, chosen + reach)]
         return chosen if (after - before) * outward >= min_change else None
+
+    def level_until(self, d_from: float, chosen: int, tolerance: float, outward: int) -> bool:
+        """Does the smoothed profile stay within ``tolerance`` of its value at ``d_from`` from
+        there outward to two pixels before the step at index ``chosen``?"""
+        u = (self.depths - d_from) * outward
+        stop = (self.depths[chosen] - d_from) * outward - 2.0
+        stretch = self.smooth[(u >= 0.0) & (u <= stop)]
+        return len(stretch) > 0 and bool(np.all(np.abs(stretch - stretch[0]) <= tolerance))
 
     def subpixel(self, chosen: int) -> float:
         """Centroid of the step's derivative lobe within a pixel of its peak."""
