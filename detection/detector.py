@@ -1508,9 +1508,9 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         # the grey pavement runs on past the step, where the ground beside is coloured (concrete
         # as light as dry grass, its rubber ending: the edges' contrast past it read beside
         # joining taxiways, or over 2 px only at 1024 px, did not withhold it; far corners
-        # 42 px short at 2048 px, 19-23 px at 1024); read over a few pixels past it, as the reciprocal
-        # runway's touchdown-zone paint taken for the end leaves only 5-6 px of pavement before
-        # the true end at 2.8 km, 2048 px: far corners 5.4-6.9 px off)
+        # 42 px short at 2048 px, 19-23 px at 1024). Read over a few pixels past it: the
+        # reciprocal runway's touchdown-zone paint taken for the end leaves only 5-6 px of
+        # pavement before the true end at 2.8 km, 2048 px (far corners 5.4-6.9 px off)
         notes.append("runway end withheld: the pavement's grey runs on past the step found, between coloured ground")
         far, far_withheld = None, True
     marking_widths = math.nan
