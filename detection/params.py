@@ -105,6 +105,10 @@ NOT_SCALED_PX = (
     "ground_margin_px", "roi_min_side_px", "centre_image_margin_px", "threshold_window_min_px",
     "border_clearance_px", "threshold_exit_margin_px", "pavement_search_px", "pavement_min_move_px",
     "pavement_window_px", "pavement_agreement_px",
+    # the chroma read past a runway end: 3 px at every size, as the 1024 px study read it before
+    # (the least band it had, max(3, a tenth of the edges' depth span)), short enough at 2048 px
+    # for the 5-6 px of pavement a false end on paint leaves
+    "end_chroma_band_px",
     # where the ground begins and the threshold marking: depth pixels of resolution and sampling
     # (threshold_marking), kept at their 2048 px values
     "ground_begin_min_px", "ground_begin_chroma_rows_px", "marking_min_resolved_px", "marking_unresolved_min_span_px",
