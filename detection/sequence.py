@@ -213,7 +213,6 @@ class DetectionSequence:
             result = self._check_threshold(result, prior, dt)
         if result.found:
             result = self._follow_threshold(result, float(t_s))
-            result = self._follow_end(result, float(t_s))
         if result.found and prior is None:
             self.marked = False                                   # a new track: confirmed by its own frames
         if result.found:
@@ -248,6 +247,8 @@ class DetectionSequence:
             return _not_found_as(result, f"not reported: frame {self.track_frames} of a new track, reported from "
                                          f"its frame {self.params.new_track_frames} (a strip found in one frame only "
                                          "can be a road or a taxiway)")
+        if result.found:
+            result = self._follow_end(result, float(t_s), new_track=prior is None)
         return result
 
     def _look_for_confirmed(self, result: DetectionResult, prior: DetectionResult, image, roll_rad: float,
@@ -541,12 +542,16 @@ class DetectionSequence:
         self.last_threshold = (t_s, width)
         return result
 
-    def _follow_end(self, result: DetectionResult, t_s: float) -> DetectionResult:
-        """Withhold a runway end narrower than the last one accepted in the last
-        ``threshold_shrink_memory_s`` seconds (less ``_width_tolerance``): flying toward the end its
-        width (f W / its distance) only grows, by about 3 % a second from 3 km. A step farther out
-        taken for it is narrower (the haze near the horizon at dusk, 1024 px, 290 m from the
-        threshold: an end 5 px wide, 8.5 px above the true one, 17 px wide a second earlier)."""
+    def _follow_end(self, result: DetectionResult, t_s: float, new_track: bool) -> DetectionResult:
+        """Withhold a runway end narrower than the last one reported in the last
+        ``threshold_shrink_memory_s`` seconds of the same track (less ``_width_tolerance``): flying
+        toward the end its width (f W / its distance) only grows, by about 3 % a second from 3 km.
+        A step farther out taken for it is narrower (the haze near the horizon at dusk, 1024 px,
+        290 m from the threshold: an end 5 px wide, 8.5 px above the true one, 17 px wide a second
+        earlier). Only reported results are remembered: an end 12.2 px wide on a strip followed but
+        not reported ('no markings', 1024 px, 3 km) withheld the true ends, 10 px wide, for 5 s."""
+        if new_track:
+            self.last_end = None
         if not result.corners_found[2:].all():
             return result
         width = float(np.hypot(*(result.corners_uv[3] - result.corners_uv[2])))

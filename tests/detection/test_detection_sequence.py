@@ -165,6 +165,16 @@ def test_a_runway_end_narrower_than_one_just_accepted_is_withheld(scripted):
             assert not np.isfinite(results[4].end_line[0]) and np.isnan(results[4].corners_uv[2:]).all()
 
 
+def test_an_end_on_a_strip_not_reported_is_not_remembered(scripted):
+    # 'no markings' at 1024 px, 3 km: an end 12.2 px wide on the strip followed but not reported,
+    # then the true ends, 10 px wide, which it withheld for 5 s while it was remembered; here the
+    # new track's first frame, never reported, holds the wider end
+    scripted([_result(far_width=12.2)] + [_result(far_width=9.0 + 0.05 * k) for k in range(4)])
+    results = _run(seq_module.DetectionSequence(CAMERA), 5, dt=0.2)
+    assert not results[0].found and "not reported: frame 1 of a new track" in results[0].reason
+    assert all(r.found and r.corners_found[2:].all() for r in results[1:]), [r.reason for r in results[1:]]
+
+
 def test_a_new_track_replaces_a_wrong_one_after_three_agreeing_rejections(scripted):
     # the first three frames followed a wrong object; from frame 3 on, the true threshold
     wrong = 0.8 * _widths_of_an_approach(3)
