@@ -101,6 +101,10 @@ __all__ = ["DetectionSequence"]
 #: point places it (degrees; measured 0.00-0.23 deg on the ray-cast airport, hazes 6-20 km).
 IMAGE_HORIZON_SIGMA_DEG = 0.15
 
+#: A runway end is compared with the median width of this many of the last ends reported
+#: (:meth:`DetectionSequence._follow_end`).
+END_TRACK_WIDTHS = 5
+
 
 def _not_found_as(result: DetectionResult, reason: str) -> DetectionResult:
     """``result`` turned into a row not found, saying ``reason``, with the frame's attitude, mode,
@@ -137,7 +141,7 @@ class DetectionSequence:
         self.threshold_track: list[tuple[float, float]] = []      # (t_s, width_px) accepted
         self.threshold_rejected: list[tuple[float, float]] = []   # rejected in a row
         self.last_threshold: tuple[float, float] | None = None     # (t_s, width_px) last accepted
-        self.last_end: tuple[float, float] | None = None           # (t_s, width_px) runway end, last accepted
+        self.end_track: list[tuple[float, float]] = []            # (t_s, width_px) runway ends reported
         self.image_attitude: ImageAttitude | None = None          # without telemetry: the last frame's
         self.identity: tuple | None = None                        # (t_s, k_centre, width_ratio) last accepted
         self.identity_history: list[tuple[float, float]] = []    # (t_s, k_centre) accepted, identity_rate_window_s
@@ -156,7 +160,7 @@ class DetectionSequence:
         self.threshold_track = []
         self.threshold_rejected = []
         self.last_threshold = None
-        self.last_end = None
+        self.end_track = []
         self.image_attitude = None
         self.identity = None
         self.identity_history = []
@@ -543,26 +547,30 @@ class DetectionSequence:
         return result
 
     def _follow_end(self, result: DetectionResult, t_s: float, new_track: bool) -> DetectionResult:
-        """Withhold a runway end narrower than the last one reported in the last
-        ``threshold_shrink_memory_s`` seconds of the same track (less ``_width_tolerance``): flying
-        toward the end its width (f W / its distance) only grows, by about 3 % a second from 3 km.
-        A step farther out taken for it is narrower (the haze near the horizon at dusk, 1024 px,
-        290 m from the threshold: an end 5 px wide, 8.5 px above the true one, 17 px wide a second
-        earlier). Only reported results are remembered: an end 12.2 px wide on a strip followed but
-        not reported ('no markings', 1024 px, 3 km) withheld the true ends, 10 px wide, for 5 s."""
+        """Withhold a runway end narrower than the ends reported in the same track in the last
+        ``threshold_shrink_memory_s`` seconds (the median of the last ``END_TRACK_WIDTHS`` of them,
+        less ``_width_tolerance``): flying toward the end its width (f W / its distance) only
+        grows, by about 3 % a second from 3 km. A step farther out taken for it is narrower (the
+        haze near the horizon at dusk, 1024 px, 290 m from the threshold: an end 5 px wide, 8.5 px
+        above the true one, 16 px wide a second earlier). The median, not the last end: one end
+        placed 2-3 px short, 12.9 px wide among true ones of 10 px ('worn, no side stripes' and
+        'sand, monochrome' at 1024 px, 3 and 2.4 km), withheld the true ends for 5 s after it. Only
+        reported ends are remembered (one on a strip followed but not reported did the same)."""
         if new_track:
-            self.last_end = None
+            self.end_track = []
         if not result.corners_found[2:].all():
             return result
         width = float(np.hypot(*(result.corners_uv[3] - result.corners_uv[2])))
         p = self.params
-        if self.last_end is not None:
-            t_last, last = self.last_end
-            if t_s - p.threshold_shrink_memory_s <= t_last < t_s and width < last - _width_tolerance(p, last):
+        track = [(t, w) for t, w in self.end_track if t_s - p.threshold_shrink_memory_s <= t < t_s]
+        if track:
+            reference = float(np.median([w for _, w in track[-END_TRACK_WIDTHS:]]))
+            if width < reference - _width_tolerance(p, reference):
+                self.end_track = track
                 return _without_end(result, f"runway end withheld: {width:.1f} px wide, narrower than the "
-                                            f"{last:.1f} px accepted {t_s - t_last:.1f} s earlier (flying toward "
-                                            "it its width only grows)")
-        self.last_end = (t_s, width)
+                                            f"{reference:.1f} px of the ends reported in the last "
+                                            f"{t_s - track[0][0]:.1f} s (flying toward it its width only grows)")
+        self.end_track = track + [(t_s, width)]
         return result
 
     def _recent_track(self, t_s: float) -> list:

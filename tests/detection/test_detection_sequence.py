@@ -165,6 +165,15 @@ def test_a_runway_end_narrower_than_one_just_accepted_is_withheld(scripted):
             assert not np.isfinite(results[4].end_line[0]) and np.isnan(results[4].corners_uv[2:]).all()
 
 
+def test_one_end_wider_than_the_others_does_not_withhold_the_next_ones(scripted):
+    # 'worn, no side stripes' at 1024 px, 3 km: an end placed 3 px short, 12.9 px wide among true
+    # ones 10 px wide; compared with the last end alone, the next 25 true ends were withheld
+    widths = [10.0, 9.9, 10.0, 12.9] + [10.0 + 0.02 * k for k in range(5)]
+    scripted([_result(far_width=w) for w in widths])
+    results = _run(seq_module.DetectionSequence(CAMERA, ONE_FRAME), len(widths), dt=0.2)
+    assert all(r.corners_found[2:].all() for r in results), [r.reason for r in results]
+
+
 def test_an_end_on_a_strip_not_reported_is_not_remembered(scripted):
     # 'no markings' at 1024 px, 3 km: an end 12.2 px wide on the strip followed but not reported,
     # then the true ends, 10 px wide, which it withheld for 5 s while it was remembered; here the
