@@ -67,6 +67,12 @@ SAME_DEPARTURE_PX = 1.5
 ON_BOUNDARY_PX = 0.75
 LEVEL_OVER_TEXTURE = 2.0
 
+#: A chroma step looked for past a narrow runway's marking band (:func:`find_transverse_line`) lies
+#: at least this many depth pixels inside the depths read: nearer their end the profile shows only
+#: the rising flank of a step beyond them ('concrete, dry grass' at 1024 px, 2.3 km: the flank 2.5
+#: px before the end of the depths read, 2.4 px short of the threshold, which lay just past them).
+FAR_PICK_CLEARANCE_PX = 3.0
+
 
 @dataclass(frozen=True)
 class TransverseLine:
@@ -574,7 +580,8 @@ def find_transverse_line(image, horizon: HorizonFrame, s0: float, left: PixelLin
                 # paint are grey; a step past a change to the ground's colour is the ground's)
                 outer_max = max(outer, params.marking_band_max_widths * width_s * d_expected / horizon.camera.fx + 1.0)
                 far_pick = chroma.pick_rising(min_significance, min_chroma_step, d_from, inner, outer_max, outward)
-                if far_pick is not None and chroma.level_until(d_from, far_pick, 0.5 * min_chroma_step, outward):
+                if (far_pick is not None and chroma.within(far_pick, FAR_PICK_CLEARANCE_PX)
+                        and chroma.level_until(d_from, far_pick, 0.5 * min_chroma_step, outward)):
                     pick = far_pick
             if pick is not None:
                 best = (chroma, pick)
@@ -1032,6 +1039,12 @@ class _StepProfile:
         before = self.smooth[max(0, chosen - reach)]
         after = self.smooth[min(len(self.smooth) - 1, chosen + reach)]
         return chosen if (after - before) * outward >= min_change else None
+
+    def within(self, chosen: int, clearance_px: float) -> bool:
+        """Is the step at index ``chosen`` at least ``clearance_px`` inside both ends of the
+        profile (a step cut off by the end of the depths read shows only its flank)?"""
+        depth = self.depths[chosen]
+        return bool(self.depths[0] + clearance_px <= depth <= self.depths[-1] - clearance_px)
 
     def level_until(self, d_from: float, chosen: int, tolerance: float, outward: int) -> bool:
         """Does the smoothed profile stay within ``tolerance`` of its value at ``d_from`` from
