@@ -25,8 +25,10 @@ that was the wrong object is replaced in about half the window). Flying toward t
 width only grows: where the track holds fewer than three widths, one narrower than the last
 threshold accepted in the last ``threshold_shrink_memory_s`` seconds (less the same tolerance) is
 withheld (below 100 ft, once the threshold had left the frame below, the touchdown zone's bars
-were taken for it; with a track, its prediction does this and more). After ``hold_s`` without a good
-detection the next search starts afresh.
+were taken for it; with a track, its prediction does this and more). So does the runway end's:
+one narrower than the median of the last ends reported in the track within the same seconds
+(less the same tolerance) is withheld (a step in the haze near the horizon taken for it at dusk).
+After ``hold_s`` without a good detection the next search starts afresh.
 
 A threshold marking seen inside the pavement (a displaced threshold's bar, the stripes after a
 blast pad: :func:`visland.detection.threshold_marking.threshold_marking`) is fixed on the ground:
