@@ -600,21 +600,21 @@ class DetectionSequence:
 
 def _without_threshold(result: DetectionResult, note: str) -> DetectionResult:
     """``result`` with its threshold line and corners withheld, saying ``note``."""
-    corners = result.corners_uv.copy()
-    corners[:2] = np.nan
-    found = result.corners_found.copy()
-    found[:2] = False
-    return replace(result, corners_uv=corners, corners_found=found,
-                   threshold_line=(math.nan, math.nan)).with_note(note)
+    return _without_line(result, slice(0, 2), "threshold_line", note)
 
 
 def _without_end(result: DetectionResult, note: str) -> DetectionResult:
     """``result`` with its runway end line and corners withheld, saying ``note``."""
+    return _without_line(result, slice(2, 4), "end_line", note)
+
+
+def _without_line(result: DetectionResult, rows: slice, line: str, note: str) -> DetectionResult:
+    """``result`` with the transverse ``line`` field and its corners ``rows`` withheld."""
     corners = result.corners_uv.copy()
-    corners[2:] = np.nan
+    corners[rows] = np.nan
     found = result.corners_found.copy()
-    found[2:] = False
-    return replace(result, corners_uv=corners, corners_found=found, end_line=(math.nan, math.nan)).with_note(note)
+    found[rows] = False
+    return replace(result, corners_uv=corners, corners_found=found, **{line: (math.nan, math.nan)}).with_note(note)
 
 
 def _ground_geometry(result: DetectionResult, camera: CameraModel):
