@@ -242,6 +242,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     contrast = bright - surface
     level = row_mean(values)                    # across the width, per line (values: NaN outside)
     doubtful = None
+    d_first_rise = -math.inf                    # depth of the first brighter line past plain pavement
     if unresolved:
         # the stripes of a threshold at the pavement's start lie within its first 0.8 widths (plus
         # the blur): a brighter line there, and the threshold is where the pavement begins
@@ -252,12 +253,18 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         # plain pavement first (no marking for several pixels: paved ground before the threshold)
         # then a brighter line further in: a marking the frame cannot place, so the threshold is
         # doubtful (at 3680 m on 1024 px a displaced threshold's bar 6.7 widths in is a 0.3 px
-        # line, dimmed below the pavement's own step)
-        first_px = rows_ok & (depths >= d_hi - unresolved_plain_px)
-        later = rows_ok & (depths < d_hi - unresolved_plain_px)
-        if first_px.sum() >= 4 and later.any() and np.ptp(level[first_px]) <= 0.5 * min_step:
-            rise = float(np.nanmax(level[later]) - np.median(level[first_px]))
-            if rise >= max(min_step, 0.5 * abs(pavement_step)):
+        # line, dimmed below the pavement's own step). The plain stretch asked is no longer than
+        # where a threshold's own stripes would show (the start lines above): a blast pad of 120 m
+        # at 3.3 km, 1024 px, is 3.5 px of pavement, the stripes blurred over its last 1.5
+        # (placed at the pad's start: 3.5 px short in 46 frames from 3.4 to 2.75 km)
+        d_plain = max(d_hi - unresolved_plain_px, depth_at(min_pavement_widths) - 1.0)
+        first_px = rows_ok & (depths >= d_plain)
+        later = rows_ok & (depths < d_plain)
+        if first_px.sum() >= 3 and later.any() and np.ptp(level[first_px]) <= 0.5 * min_step:
+            least_rise = max(min_step, 0.5 * abs(pavement_step))
+            rising = later & (level - np.median(level[first_px]) >= least_rise)
+            if rising.any():
+                d_first_rise = float(depths[np.nonzero(rising)[0][0]])
                 j = int(np.nonzero(later)[0][np.nanargmax(level[later])])
                 doubtful = ThresholdMarking(line=None, kind="unresolved",
                                             pavement_widths=float(widths_along(fx, d_pavement, depths[j], width_k)))
@@ -285,6 +292,12 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     d_band = float(depths[first])
     widths_in = widths_along(fx, d_pavement, d_band, width_k)
     if not (min_pavement_widths <= widths_in <= max_pavement_widths):
+        return doubtful
+    if d_band < d_first_rise - ONE_LINE_PX:
+        # a brighter line lies between the plain pavement and the band: the first marking inside
+        # the pavement is not the band, which is a mark farther along (a blast pad's threshold
+        # stripes blended below the band test at 3.3 km, 1024 px, and the aiming-point marks
+        # 10 px further in taken for them)
         return doubtful
     # the band's near edge to a fraction of a pixel: the mean level across the width crossing
     # midway between the plain pavement before it and the band, both read on their own lines only
