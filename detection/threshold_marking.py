@@ -242,14 +242,22 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     contrast = bright - surface
     level = row_mean(values)                    # across the width, per line (values: NaN outside)
     doubtful = None
-    d_first_rise = -math.inf                    # depth of the first brighter line past plain pavement
+    d_first_rise = -math.inf                    # unresolved: depth of the first line brighter than the pavement
     if unresolved:
         # the stripes of a threshold at the pavement's start lie within its first 0.8 widths (plus
         # the blur): a brighter line there, and the threshold is where the pavement begins
-        start = (depths >= depth_at(min_pavement_widths) - 1.0) & rows_ok
+        d_start_reach = depth_at(min_pavement_widths) - 1.0
+        start = (depths >= d_start_reach) & rows_ok
         plain = float(np.nanmedian(level[rows_ok]))
         if not start.any() or float(np.nanmax(level[start])) - plain > start_fraction * max(contrast, 0.0):
             return None
+        # the first line brighter than the pavement by the frame's least step, past the ground's
+        # blur, is the first marking inside it: a band the test below finds farther in is not the
+        # threshold's (a blast pad's stripes, blended below the band test at 3.3 km, 1024 px,
+        # and the aiming-point marks 10 px in taken for them)
+        rising = rows_ok & (depths <= d_pavement - ONE_LINE_PX) & (level - plain >= min_step)
+        if rising.any():
+            d_first_rise = float(depths[np.nonzero(rising)[0][0]])
         # plain pavement first (no marking for several pixels: paved ground before the threshold)
         # then a brighter line further in: a marking the frame cannot place, so the threshold is
         # doubtful (at 3680 m on 1024 px a displaced threshold's bar 6.7 widths in is a 0.3 px
@@ -257,14 +265,12 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         # where a threshold's own stripes would show (the start lines above): a blast pad of 120 m
         # at 3.3 km, 1024 px, is 3.5 px of pavement, the stripes blurred over its last 1.5
         # (placed at the pad's start: 3.5 px short in 46 frames from 3.4 to 2.75 km)
-        d_plain = max(d_hi - unresolved_plain_px, depth_at(min_pavement_widths) - 1.0)
+        d_plain = max(d_hi - unresolved_plain_px, d_start_reach)
         first_px = rows_ok & (depths >= d_plain)
         later = rows_ok & (depths < d_plain)
         if first_px.sum() >= 3 and later.any() and np.ptp(level[first_px]) <= 0.5 * min_step:
-            least_rise = max(min_step, 0.5 * abs(pavement_step))
-            rising = later & (level - np.median(level[first_px]) >= least_rise)
-            if rising.any():
-                d_first_rise = float(depths[np.nonzero(rising)[0][0]])
+            rise = float(np.nanmax(level[later]) - np.median(level[first_px]))
+            if rise >= max(min_step, 0.5 * abs(pavement_step)):
                 j = int(np.nonzero(later)[0][np.nanargmax(level[later])])
                 doubtful = ThresholdMarking(line=None, kind="unresolved",
                                             pavement_widths=float(widths_along(fx, d_pavement, depths[j], width_k)))
@@ -294,11 +300,13 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     if not (min_pavement_widths <= widths_in <= max_pavement_widths):
         return doubtful
     if d_band < d_first_rise - ONE_LINE_PX:
-        # a brighter line lies between the plain pavement and the band: the first marking inside
-        # the pavement is not the band, which is a mark farther along (a blast pad's threshold
-        # stripes blended below the band test at 3.3 km, 1024 px, and the aiming-point marks
-        # 10 px further in taken for them)
-        return doubtful
+        # a brighter line nearer the pavement's start than the band: the band is a mark farther
+        # along. Within the threshold's own stripes' reach that line is them (the pavement's start
+        # stands); past it, a marking the frame cannot place
+        if d_first_rise >= d_start_reach:
+            return None
+        return doubtful or ThresholdMarking(line=None, kind="unresolved", pavement_widths=float(
+            widths_along(fx, d_pavement, d_first_rise, width_k)))
     # the band's near edge to a fraction of a pixel: the mean level across the width crossing
     # midway between the plain pavement before it and the band, both read on their own lines only
     # (not on the short marks skipped before the band, a displaced threshold's arrow heads, nor on
