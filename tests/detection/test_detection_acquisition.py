@@ -365,11 +365,11 @@ def test_threshold_stripes_blurred_onto_one_line_mark_a_blast_pad_threshold(fram
 @pytest.mark.parametrize("distance", [3350.0, 3250.0])
 def test_a_blast_pad_too_short_to_show_plain_pavement_does_not_place_the_threshold_at_its_start(distance):
     """The robustness study's blast pad (120 m of pavement before the threshold), 1024 px, 3.35
-    and 3.25 km out (single frames; farther in, a frame alone does not hold the edges): the pad is 3.5 px of depth, the threshold's stripes blurred over its last 1.5, so
-    the 3 px of plain pavement the unresolved marking test asked were never there and the
-    threshold was put where the pad begins (found, near corners 3.3-4.2 px off in 46 frames of
-    the study). The threshold must be withheld or within 1 px of the exact labels, and never
-    taken on a mark farther in (the aiming-point marks, 10 px in at 3.3 km)."""
+    and 3.25 km out (single frames; farther in, a frame alone does not hold the edges): the pad
+    is 3.5 px of depth, the threshold's stripes blurred over its last 1.5, so the 3 px of plain
+    pavement the unresolved marking test asked were never there and the threshold was put where
+    the pad begins (found, near corners 3.3-4.2 px off in 46 frames of the study). The threshold
+    must be withheld or within 1 px of the exact labels."""
     scene = {"markings": "blast_pad", "pre_threshold_m": 120.0}
     rgb, camera, state, labels = study_frame_at(scene, (3000.0, 45.0), distance, 1024)
     result, errors = detected_with_errors(rgb, camera, state, labels)
