@@ -1460,7 +1460,10 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
     d_exit = _depth_leaving_image(horizon, s0_vp, 0.5 * (k_left_through_vp + k_right_through_vp), d_mid, bottom_depth,
                                   width, height)
     near_window = window(d_near_expected)
-    if d_near_expected >= d_exit - params.threshold_exit_margin_px:
+    runs_out = extent is not None and extent.near_runs_out
+    if d_near_expected >= d_exit - params.threshold_exit_margin_px or runs_out:
+        # (the surface read to the last row the image holds: its near end is the image's, a
+        # few pixels short of where the runway's centre line leaves it)
         near = None
         edges_reach_border = True
     else:
@@ -1475,11 +1478,31 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         again = transverse(d_near, window(d_near), 1)
         if again is not None:
             near = again
+    near_on_marking = False               # the threshold placed on a marking ahead, no step found
     if near is not None and not near.spans:
         notes.append("threshold withheld: the transverse step found does not span the runway's width")
         near = None
     elif near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
+        if extent is not None:
+            # no step where the surface ends: a threshold marking may still lie ahead on the
+            # pavement. The pavement running out of the image, a displaced threshold's bar or
+            # stripes (300 m of pavement before it, 2048 px: its start leaves the image at 380
+            # m, 37 m high, and the threshold was lost for the last 5 s above 100 ft); a blast
+            # pad's chevrons ending the surface read (120 m, 2048 px, from 190 m: the surface
+            # ended on a chevron, no step there). The first threshold marking from there inwards,
+            # past the stripes' own reach (a true threshold just below the image or where the
+            # surface ends leaves at most its stripes there; the touchdown zone's and aiming
+            # point's marks leave the middle free and are no threshold marking), where its first
+            # widths are resolved
+            d_from = min(d_near_expected, d_exit - params.threshold_exit_margin_px)
+            ahead = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_from,
+                                      1.0, min_step, surface_level=surface_level, resolved_only=True, params=params)
+            if ahead is not None and ahead.line is not None:
+                start = ("the image, the pavement running out of it" if edges_reach_border
+                         else "where the surface seemed to end (no step there)")
+                notes[-1] = f"threshold on the {ahead.kind} marking {ahead.pavement_widths:.1f} runway widths inside {start}"
+                near, near_on_marking = ahead.line, True
     far = transverse(d_far_expected, window(d_far_expected), -1)
     far_withheld = False
     if far is not None and far.spans and far.depth_px - d_far > params.end_past_edges_fraction * depth_span:
@@ -1514,7 +1537,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         notes.append("runway end withheld: the pavement's grey runs on past the step found, between coloured ground")
         far, far_withheld = None, True
     marking_widths = math.nan
-    if near is not None:
+    if near is not None and not near_on_marking:
         # a step inside the pavement (a patch's edge, the stripes' inner edge) is not where the
         # runway begins: the ground must begin at the threshold, or the step is searched again
         # where it does; then, if the pavement precedes a threshold marking (displaced

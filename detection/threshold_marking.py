@@ -106,7 +106,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
                       max_pavement_widths: float | None = None, n_columns: int | None = None, step_d_px: float = 0.5,
                       min_resolved_px: float | None = None, min_unresolved_span_px: float | None = None,
                       start_fraction: float | None = None, unresolved_coverage: float | None = None,
-                      unresolved_plain_px: float | None = None,
+                      unresolved_plain_px: float | None = None, resolved_only: bool = False,
                       params: DetectorParams | None = None) -> ThresholdMarking | None:
     """The threshold marking when the pavement before it starts at ``d_pavement`` (module docstring).
 
@@ -171,6 +171,9 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     unresolved_plain_px : float, optional
         Unresolved: depth pixels of plain pavement at its start before a brighter line makes the
         threshold doubtful (``params.marking_unresolved_plain_px`` by default).
+    resolved_only : bool, optional
+        None when the first ``min_pavement_widths`` are not resolved (the caller has no step
+        where the pavement begins, and far out a band found is too uncertain to place it).
     params : DetectorParams, optional
         The defaults above, ``marking_column_span`` and the band test (``marking_bright_percentile``,
         ``marking_quarter_min_share``, ``marking_bar_coverage``, ``marking_min_stripes``);
@@ -207,6 +210,8 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     # too far to resolve the threshold's own stripes at the pavement's start: they are still seen
     # blended, a brighter first pixel of pavement (checked below, before a band further in counts)
     unresolved = d_pavement - depth_at(min_pavement_widths) < min_resolved_px
+    if unresolved and resolved_only:
+        return None
     d_lo = max(depth_at(max_pavement_widths), d_far + 2.0, 1.0)
     d_hi = d_pavement - 0.5
     if d_hi - d_lo < 4.0:

@@ -49,11 +49,15 @@ class SurfaceExtent(tuple):
         Depths below the horizon (pixels) of the surface's far and near ends.
     level : float
         The surface's grey level between its markings.
+    near_runs_out : bool
+        The surface runs on to the last row read in the image: its near end is where the image
+        ends, not a step (the threshold, or the pavement before it, below the image).
     """
 
-    def __new__(cls, d_far: float, d_near: float, level: float):
+    def __new__(cls, d_far: float, d_near: float, level: float, near_runs_out: bool = False):
         extent = super().__new__(cls, (float(d_far), float(d_near)))
         extent.level = float(level)
+        extent.near_runs_out = bool(near_runs_out)
         return extent
 
 
@@ -285,7 +289,9 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
     start = rect.d[lo]
     while lo > 0 and band[lo - 1] and start - rect.d[lo - 1] <= reach(start):
         lo -= 1
-    return SurfaceExtent(rect.d[lo], rect.d[hi], surface_level)
+    # no row nearer than the run's end holds a level: the image ends there
+    near_runs_out = not np.isfinite(surface[hi + 1:]).any()
+    return SurfaceExtent(rect.d[lo], rect.d[hi], surface_level, near_runs_out)
 
 
 def _majority_of_three(rows: np.ndarray) -> np.ndarray:
