@@ -273,7 +273,12 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         d_plain = max(d_hi - unresolved_plain_px, d_start_reach)
         first_px = rows_ok & (depths >= d_plain)
         later = rows_ok & (depths < d_plain)
-        if first_px.sum() >= 3 and later.any() and np.ptp(level[first_px]) <= 0.5 * min_step:
+        # (that shorter stretch at the surface's own level too: no paint blended into it; the
+        # ray-cast airport's 1280 x 720 barrel lens at 2.5 km, its first 1.3 px flat but 4-6
+        # levels over the surface, the stripes' ends, was taken for a plain one)
+        bare = first_px.any() and (d_plain == d_hi - unresolved_plain_px
+                                   or abs(float(np.median(level[first_px])) - surface) <= 0.5 * min_step)
+        if first_px.sum() >= 3 and later.any() and np.ptp(level[first_px]) <= 0.5 * min_step and bare:
             rise = float(np.nanmax(level[later]) - np.median(level[first_px]))
             if rise >= max(min_step, 0.5 * abs(pavement_step)):
                 j = int(np.nonzero(later)[0][np.nanargmax(level[later])])
