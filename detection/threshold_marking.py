@@ -266,24 +266,26 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         # plain pavement first (no marking for several pixels: paved ground before the threshold)
         # then a brighter line further in: a marking the frame cannot place, so the threshold is
         # doubtful (at 3680 m on 1024 px a displaced threshold's bar 6.7 widths in is a 0.3 px
-        # line, dimmed below the pavement's own step). The plain stretch asked is no longer than
-        # where a threshold's own stripes would show (the start lines above): a blast pad of 120 m
-        # at 3.3 km, 1024 px, is 3.5 px of pavement, the stripes blurred over its last 1.5
-        # (placed at the pad's start: 3.5 px short in 46 frames from 3.4 to 2.75 km)
-        d_plain = max(d_hi - unresolved_plain_px, d_start_reach)
-        first_px = rows_ok & (depths >= d_plain)
-        later = rows_ok & (depths < d_plain)
-        # (that shorter stretch at the surface's own level too: no paint blended into it; the
-        # ray-cast airport's 1280 x 720 barrel lens at 2.5 km, its first 1.3 px flat but 4-6
-        # levels over the surface, the stripes' ends, was taken for a plain one)
-        bare = first_px.any() and (d_plain == d_hi - unresolved_plain_px
-                                   or abs(float(np.median(level[first_px])) - surface) <= 0.5 * min_step)
-        if first_px.sum() >= 3 and later.any() and np.ptp(level[first_px]) <= 0.5 * min_step and bare:
-            rise = float(np.nanmax(level[later]) - np.median(level[first_px]))
-            if rise >= max(min_step, 0.5 * abs(pavement_step)):
+        # line, dimmed below the pavement's own step). Or plain over a shorter stretch, where a
+        # threshold's own stripes would show (the start lines above), at the surface's own level
+        # (no paint blended into it): a blast pad of 120 m at 3.3 km, 1024 px, is 3.5 px of
+        # pavement, the stripes blurred over its last 1.5 (placed at the pad's start, 3.5 px
+        # short, in 46 frames from 3.4 to 2.75 km); the ray-cast airport's 1280 x 720 barrel
+        # lens at 2.5 km has its first 1.3 px flat but 4-6 levels over the surface (the
+        # stripes' ends)
+        for d_plain, at_surface in ((d_hi - unresolved_plain_px, False), (d_start_reach, True)):
+            first_px = rows_ok & (depths >= d_plain)
+            later = rows_ok & (depths < d_plain)
+            if not (first_px.sum() >= 3 and later.any() and np.ptp(level[first_px]) <= 0.5 * min_step):
+                continue
+            plain_level = float(np.median(level[first_px]))
+            if at_surface and abs(plain_level - surface) > 0.5 * min_step:
+                continue
+            if float(np.nanmax(level[later])) - plain_level >= max(min_step, 0.5 * abs(pavement_step)):
                 j = int(np.nonzero(later)[0][np.nanargmax(level[later])])
                 doubtful = ThresholdMarking(line=None, kind="unresolved",
                                             pavement_widths=float(widths_along(fx, d_pavement, depths[j], width_k)))
+                break
     if not contrast >= max(2.0 * min_step, abs(pavement_step)):
         return doubtful
     marked = np.nan_to_num((values - surface) * sign, nan=-1.0) > 0.5 * contrast
