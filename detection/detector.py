@@ -1460,10 +1460,11 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
     d_exit = _depth_leaving_image(horizon, s0_vp, 0.5 * (k_left_through_vp + k_right_through_vp), d_mid, bottom_depth,
                                   width, height)
     near_window = window(d_near_expected)
-    runs_out = extent is not None and extent.near_runs_out
-    if d_near_expected >= d_exit - params.threshold_exit_margin_px or runs_out:
-        # (the surface read to the last row the image holds: its near end is the image's, a
-        # few pixels short of where the runway's centre line leaves it)
+    # (the surface read to the last row the image holds: its near end is the image's, a few
+    # pixels short of where the runway's centre line leaves it)
+    surface_out = d_near_expected >= d_exit - params.threshold_exit_margin_px or (
+        extent is not None and extent.near_runs_out)
+    if surface_out:
         near = None
         edges_reach_border = True
     else:
@@ -1484,24 +1485,22 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         near = None
     elif near is None:
         notes.append("threshold below the image" if edges_reach_border else "threshold not found")
-        if extent is not None:
-            # no step where the surface ends: a threshold marking may still lie ahead on the
-            # pavement. The pavement running out of the image, a displaced threshold's bar or
-            # stripes (300 m of pavement before it, 2048 px: its start leaves the image at 380
-            # m, 37 m high, and the threshold was lost for the last 5 s above 100 ft); a blast
-            # pad's chevrons ending the surface read (120 m, 2048 px, from 190 m: the surface
-            # ended on a chevron, no step there). The first threshold marking from there inwards,
-            # past the stripes' own reach (a true threshold just below the image or where the
-            # surface ends leaves at most its stripes there; the touchdown zone's and aiming
-            # point's marks leave the middle free and are no threshold marking), where its first
-            # widths are resolved
+        if surface_out and extent is not None:
+            # the pavement runs out of the image: a displaced threshold's bar or stripes can still
+            # be ahead on it (300 m of pavement before the threshold, 2048 px: its start leaves the
+            # image at 380 m, 37 m high, and the threshold was lost for the last 5 s above 100
+            # ft). The first threshold marking from the image's edge inwards, past the stripes'
+            # own reach (a true threshold just below the image leaves at most the far ends of its
+            # stripes in view; the touchdown zone's and aiming point's marks leave the middle free
+            # and are no threshold marking), where the first widths are resolved. Not where the
+            # surface merely seemed to end without a step: on concrete as light as dry grass that
+            # end is anywhere, and a band past it was reported 97-522 px off at 2048 px
             d_from = min(d_near_expected, d_exit - params.threshold_exit_margin_px)
             ahead = threshold_marking(ctx.image, horizon, s0_vp, fits["left"].line, fits["right"].line, d_from,
                                       1.0, min_step, surface_level=surface_level, resolved_only=True, params=params)
             if ahead is not None and ahead.line is not None:
-                start = ("the image, the pavement running out of it" if edges_reach_border
-                         else "where the surface seemed to end (no step there)")
-                notes[-1] = f"threshold on the {ahead.kind} marking {ahead.pavement_widths:.1f} runway widths inside {start}"
+                notes[-1] = (f"threshold on the {ahead.kind} marking {ahead.pavement_widths:.1f} runway widths inside "
+                             "the image, the pavement running out of it")
                 near, near_on_marking = ahead.line, True
     far = transverse(d_far_expected, window(d_far_expected), -1)
     far_withheld = False
