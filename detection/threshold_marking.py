@@ -151,13 +151,19 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         ``start_fraction`` of the markings' contrast keeps the pavement's start (None, as
         before). Otherwise a band across the width covering ``unresolved_coverage`` of it, on
         lines crossing the runway over ``min_unresolved_span_px`` at least (stripes are not told
-        from a bar there), is the marking; and when there is none the frame can place, but the
-        first ``unresolved_plain_px`` of pavement are plain (their lines within half ``min_step``)
-        and a line further in is brighter by ``min_step`` and half ``pavement_step`` at least, a
+        from a bar there), is the marking, unless a line nearer the pavement's start is brighter
+        than its median line by ``min_step`` (the first marking inside it: within the first
+        ``min_pavement_widths`` the pavement's start stands, past them the threshold is
+        doubtful); and when there is none the frame can place, but the first
+        ``unresolved_plain_px`` of pavement are plain (their lines within half ``min_step``), or
+        its first ``min_pavement_widths`` (plus 1 px) are plain at the surface's own level, and a
+        line further in is brighter by ``min_step`` and half ``pavement_step`` at least, a
         marking lies inside the pavement that the frame cannot place: the threshold is doubtful
         (kind ``"unresolved"``). Measured on the robustness study's displaced threshold (1024 px):
         at 2500 m the bar 7 widths in is placed (0.32 px; 10.2 px off at the pavement's start);
-        at 3680 m it is a 0.3 px line dimmer than the pavement's step, withheld (was 9.1 px off).
+        at 3680 m it is a 0.3 px line dimmer than the pavement's step, withheld (was 9.1 px off);
+        its blast pad (120 m) at 3.4-2.75 km, 3.5 px of pavement before stripes blurred over 1.5
+        px, withheld (was 3.3-4.2 px off).
     min_unresolved_span_px : float, optional
         Unresolved: pixels a transverse line must cross the runway over to be read
         (``params.marking_unresolved_min_span_px`` by default).
