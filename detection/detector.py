@@ -1479,7 +1479,6 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         again = transverse(d_near, window(d_near), 1)
         if again is not None:
             near = again
-    near_on_marking = False               # the threshold placed on a marking ahead, no step found
     if near is not None and not near.spans:
         notes.append("threshold withheld: the transverse step found does not span the runway's width")
         near = None
@@ -1501,7 +1500,7 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
             if ahead is not None and ahead.line is not None:
                 notes[-1] = (f"threshold on the {ahead.kind} marking {ahead.pavement_widths:.1f} runway widths inside "
                              "the image, the pavement running out of it")
-                near, near_on_marking = ahead.line, True
+                near = ahead.line
     far = transverse(d_far_expected, window(d_far_expected), -1)
     far_withheld = False
     if far is not None and far.spans and far.depth_px - d_far > params.end_past_edges_fraction * depth_span:
@@ -1536,7 +1535,10 @@ def _threshold_and_end(ctx: _Context, pair: _EdgePair, vp_uv: np.ndarray, bottom
         notes.append("runway end withheld: the pavement's grey runs on past the step found, between coloured ground")
         far, far_withheld = None, True
     marking_widths = math.nan
-    if near is not None and not near_on_marking:
+    if near is not None and not near.method.startswith("marking"):
+        # (a threshold already on a marking, ahead on pavement running out of the image, has no
+        # pavement's start to check)
+        #
         # a step inside the pavement (a patch's edge, the stripes' inner edge) is not where the
         # runway begins: the ground must begin at the threshold, or the step is searched again
         # where it does; then, if the pavement precedes a threshold marking (displaced

@@ -215,7 +215,11 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
 
     # too far to resolve the threshold's own stripes at the pavement's start: they are still seen
     # blended, a brighter first pixel of pavement (checked below, before a band further in counts)
-    unresolved = d_pavement - depth_at(min_pavement_widths) < min_resolved_px
+    d_min_pavement = depth_at(min_pavement_widths)
+    unresolved = d_pavement - d_min_pavement < min_resolved_px
+    # where a threshold at the pavement's start would show its stripes: its first widths and a
+    # pixel of blur
+    d_start_reach = d_min_pavement - 1.0
     if unresolved and resolved_only:
         return None
     d_lo = max(depth_at(max_pavement_widths), d_far + 2.0, 1.0)
@@ -257,7 +261,6 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     if unresolved:
         # the stripes of a threshold at the pavement's start lie within its first 0.8 widths (plus
         # the blur): a brighter line there, and the threshold is where the pavement begins
-        d_start_reach = depth_at(min_pavement_widths) - 1.0
         start = (depths >= d_start_reach) & rows_ok
         plain = float(np.nanmedian(level[rows_ok]))
         if not start.any() or float(np.nanmax(level[start])) - plain > start_fraction * max(contrast, 0.0):
