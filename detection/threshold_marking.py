@@ -336,16 +336,16 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     j_band = [j for j in range(first, min(len(depths), first + 3)) if band[j]]
     band_level = float(np.nanmean(level[j_band]))
     plain_level = float(np.nanmean(level[j_plain])) if first - 1 > max(0, marks_end) else surface
-    mid = 0.5 * (band_level + plain_level)
-    edge = d_band
-    for j in range(max(0, first - 4, marks_end), min(len(depths) - 1, first + 2)):
-        a, b = level[j] - mid, level[j + 1] - mid
-        if math.isfinite(a) and math.isfinite(b) and (a * sign) < 0 <= (b * sign):
-            edge = float(depths[j] + (depths[j + 1] - depths[j]) * a / (a - b))
-            break
+    j_from, j_to = max(0, first - 4, marks_end), min(len(depths) - 1, first + 2)
+    edge = _rising_through(level * sign, depths, j_from, j_to, 0.5 * (band_level + plain_level) * sign)
+    edge = d_band if edge is None else edge
     if kind == "stripes":
-        # the threshold 6 m before the stripes
-        edge = depth_along(fx, edge, -STRIPES_FROM_THRESHOLD_WIDTHS, width_k)
+        # the threshold 6 m before the stripes, where the paint begins to vary across the width:
+        # a displaced threshold's bar 6 m before them (1.8 m wide, 4.2 m of pavement after it)
+        # blends with their first line where those 6 m span a pixel or two, and moves the mean
+        # level's rise towards the camera, but it adds to every column alike
+        stripes_from = _stripes_start(values, band, depths, first, marks_end, j_from, j_to, min_step)
+        edge = depth_along(fx, edge if stripes_from is None else stripes_from, -STRIPES_FROM_THRESHOLD_WIDTHS, width_k)
     line_h = transverse_line_h(horizon, s0, k_centre, edge)
     line = TransverseLine(line_h=line_h, corner_left_uv=meet_h(line_h, line_left),
                           corner_right_uv=meet_h(line_h, line_right), depth_px=edge,
@@ -594,6 +594,52 @@ def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLi
     if not (np.std(deeper) > 0 and float(np.corrcoef(columns, deeper)[0, 1]) >= STRIPES_ALIKE):
         return False
     return bool(abs(between - ground_level) <= 0.3 * (paint - ground_level))
+
+
+def _rising_through(profile: np.ndarray, depths: np.ndarray, j_from: int, j_to: int, mid: float) -> float | None:
+    """Depth where ``profile`` (a value per line read) first rises through ``mid`` from line
+    ``j_from`` on (the crossing's last line before ``j_to``), interpolated between the two lines;
+    None when it does not."""
+    for j in range(j_from, j_to):
+        a, b = profile[j] - mid, profile[j + 1] - mid
+        if math.isfinite(a) and math.isfinite(b) and a < 0 <= b:
+            return float(depths[j] + (depths[j + 1] - depths[j]) * a / (a - b))
+    return None
+
+
+def _stripes_start(values: np.ndarray, band: np.ndarray, depths: np.ndarray, first: int, marks_end: int,
+                   j_from: int, j_to: int, min_step: float) -> float | None:
+    """Depth where the stripes of the band beginning on line ``first`` begin: where the paint's
+    variation across the width (the 80th percentile of a line's samples less its 20th: the
+    stripes over the gaps between them) rises halfway from the lines before the band
+    (``marks_end`` on) to the band's own, searched from line ``j_from`` to ``j_to``.
+
+    A bar across adds to the stripes and the gaps alike: a displaced threshold's bar blended with
+    the stripes' first line (1.8 m wide and 4.2 m before them: a pixel or two of depth for the 6 m
+    from 650 m to 1.7 km out at 2048 px) leaves this rise where the stripes begin, while the mean
+    level rises on the bar (the threshold placed 6 m short: 1.0-1.5 px, a frame out of three, in
+    the robustness study). None when the band's stripes do not vary across the width by twice
+    ``min_step`` more than the lines before it, or it has too few lines to tell.
+    """
+    stop = first + int(np.argmin(band[first:])) if not band[first:].all() else len(band)
+    j0 = max(0, first - 6, marks_end)
+    if stop - (first + 2) < 2 or first - 1 - j0 < 1:
+        return None
+    read = values[j0:stop]
+    if not np.isfinite(read).all():
+        return None
+    columns = read[first + 2 - j0:].mean(axis=0)          # the band's own lines, past its start's blur
+    low, high = np.percentile(columns, [20.0, 80.0])
+    on_stripes = columns > 0.5 * (low + high)
+    if on_stripes.all() or not on_stripes.any():
+        return None
+    spread = np.full(len(depths), np.nan)
+    spread[j0:stop] = read[:, on_stripes].mean(axis=1) - read[:, ~on_stripes].mean(axis=1)
+    body = float(np.median(spread[first + 2:stop]))
+    plain = float(np.median(spread[j0:first - 1]))
+    if not body - plain >= 2.0 * min_step:
+        return None
+    return _rising_through(spread, depths, max(j_from, j0), min(j_to, stop - 1), 0.5 * (body + plain))
 
 
 def _first_threshold_band(band: np.ndarray, is_bar: np.ndarray, depths: np.ndarray, fx: float, width_k: float,
