@@ -433,6 +433,13 @@ def marked_at_start(image, horizon: HorizonFrame, s0: float, left: PixelLine, ri
 #: The shortest setback of threshold stripes from the threshold, runway widths: ICAO Annex 14 and
 #: the FAA both start them 6 m in, 0.1 widths of the widest runway (60 m).
 STRIPE_SETBACK_WIDTHS = 0.1
+
+#: Depth pixels the setback must span for :func:`starts_on_its_stripes` to read it (a line at
+#: least, half a pixel inside the threshold found). At 2 px, 'concrete, sand, mono' at 2048 px
+#: kept thresholds on the stripes' start 2.4-3.0 px beyond the true one from 680 to 510 m, where
+#: the setback is 1.3-1.7 px.
+STRIPE_SETBACK_MIN_PX = 1.0
+
 #: Runway widths past a threshold line where its stripes lie whatever the runway: they start 6 m
 #: in (0.26 widths of a 23 m runway) and run 30 m (ICAO; 45 m FAA), 0.5 widths of a 60 m one.
 STRIPES_INSIDE_WIDTHS = (0.3, 0.5)
@@ -554,7 +561,7 @@ def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLi
 
     Threshold stripes start 6 m past the threshold (:data:`STRIPE_SETBACK_WIDTHS` of the widest
     runway), so the band just inside a true threshold is plain pavement. Where that band would
-    be 2 px deep or more, it is read across the runway (48 columns over ``marking_column_span``):
+    be :data:`STRIPE_SETBACK_MIN_PX` deep or more, it is read across the runway (48 columns over ``marking_column_span``):
     a threshold placed on the stripes' start has paint and pavement side by side there (the 80th
     and 20th percentiles of the columns' levels at least ``min_step`` apart), bright in the same
     columns as the stripes :data:`STRIPES_INSIDE_WIDTHS` past the line (a correlation of
@@ -568,7 +575,7 @@ def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLi
         return False
     line_left, line_right, width_k, k_centre = across
     d_setback = float(depth_along(horizon.camera.fx, d_threshold, STRIPE_SETBACK_WIDTHS, width_k))
-    if not d_threshold - d_setback >= 2.0:
+    if not d_threshold - d_setback >= STRIPE_SETBACK_MIN_PX:
         return False
     band = np.arange(d_threshold - 0.5, d_setback + 0.25, -0.5)
     ground = d_threshold + np.array([1.0, 1.5, 2.0])

@@ -1,0 +1,109 @@
+"""Where the threshold stripes start, 6 m past the threshold, on synthetic grey frames drawn in
+metres on the ground and sampled like a rendered frame (each pixel the mean of 4 x 4 samples,
+then a blur of half a pixel); the SPEC camera at 2048 px, 12 stripes 1.8 m wide and 30 m long.
+
+- A displaced threshold's bar blended with the stripes after it
+  (:func:`visland.detection.threshold_marking.threshold_marking`). The robustness study's
+  displaced threshold at 2048 px, 1 km out: the bar (1.8 m) and the gap after it (4.2 m) span a
+  pixel of depth, so the band test sees one band, its first lines striped. Taken for the
+  stripes' start, the threshold was placed 6 m before it, 6 m short of the bar (1.0-1.5 px, in
+  one frame out of three from 1.7 km to 650 m, by the phase of the bar against the lines read).
+  The stripes begin where the paint varies across the width, which a bar across does not change.
+  A 45 m runway seen from 67 m above the ground (3 deg from 1 km), the threshold 1000-1003 m
+  ahead (every phase of the lines read), 300 m of pavement before it.
+- The stripes' start taken for the threshold where the pavement is as light as the ground
+  (:func:`visland.detection.threshold_marking.starts_on_its_stripes`): 'concrete, sand, mono' at
+  2048 px kept thresholds 2.4-3.0 px beyond the true one from 680 to 510 m, where the 0.1 widths
+  read before the stripes span 1.3-1.7 px and under 2 px were not read.
+"""
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from visland.camera import CameraModel
+from visland.detection import DetectorParams
+from visland.detection.horizon import horizon_frame
+from visland.detection.refine import PixelLine
+from visland.detection.threshold_marking import starts_on_its_stripes, threshold_marking
+
+WIDTH_M, HEIGHT_M = 45.0, 67.0
+DISPLACED_M = 300.0
+GRASS, PAVEMENT, PAINT = 110.0, 70.0, 190.0
+SUPERSAMPLE = 4
+S0 = 0.0                                       # V1 on the horizon, px from Q
+
+
+def _paint(x_m, y_m, bar):
+    """Paint share at ``x_m`` metres past the threshold, ``y_m`` from the centre line."""
+    stripes = (x_m >= 6.0) & (x_m < 36.0) & (np.abs(y_m) <= 0.5 * WIDTH_M - 1.8) & \
+        (np.floor((y_m + 0.5 * WIDTH_M - 1.8) / 1.8) % 2 == 0)
+    painted = stripes | ((x_m >= 0.0) & (x_m < 1.8)) if bar else stripes
+    return painted.astype(float)
+
+
+def _frame(threshold_m, bar, height_m=HEIGHT_M, before_m=DISPLACED_M, grass=GRASS):
+    """Grey 2048 px frame and its horizon, edges and params, and the threshold's depth below the
+    horizon, for a threshold ``threshold_m`` ahead seen from ``height_m`` above the ground, with
+    ``before_m`` of pavement before it and the ground at grey level ``grass``."""
+    camera = CameraModel.default(2048)
+    horizon = horizon_frame(camera, 0.0, math.radians(2.0))
+    f = camera.fx
+
+    def ground(v0, v1, scale):
+        v, u = np.mgrid[v0 * scale:v1 * scale, 0:camera.width * scale]
+        sd = horizon.to_sd((np.stack([u.ravel(), v.ravel()], axis=1) + 0.5) / scale - 0.5)
+        s, d = sd[:, 0].reshape(u.shape), sd[:, 1].reshape(u.shape)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x_m = f * height_m / d - threshold_m             # metres past the threshold
+            y_m = (s - S0) * height_m / d                    # metres right of the centre line
+        on_runway = (d > 0) & (np.abs(y_m) <= 0.5 * WIDTH_M) & (x_m >= -before_m)
+        return on_runway, np.where(on_runway, _paint(x_m, y_m, bar), 0.0), d
+
+    on_runway, _, d = ground(0, camera.height, 1)
+    grey = np.where(on_runway, PAVEMENT, grass)
+    grey[d < 0] = 220.0
+    # the marking's rows, supersampled: the paint averaged over each pixel
+    d_thr = f * height_m / threshold_m
+    rows = np.flatnonzero((d[:, camera.width // 2] < d_thr + 3) & (d[:, camera.width // 2] > d_thr * 0.9))
+    v0, v1 = int(rows.min()), int(rows.max()) + 1
+    inside, paint, _ = ground(v0, v1, SUPERSAMPLE)
+    fine = np.where(inside, PAVEMENT + paint * (PAINT - PAVEMENT), grass)
+    grey[v0:v1] = fine.reshape(v1 - v0, SUPERSAMPLE, camera.width, SUPERSAMPLE).mean(axis=(1, 3))
+    grey = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), 0.5).round().astype(np.uint8)
+
+    def edge(k):
+        a, b = horizon.pencil_point(S0, k, 100.0), horizon.pencil_point(S0, k, 300.0)
+        return PixelLine(np.asarray(a, float), (b - a) / np.linalg.norm(b - a))
+    k_half = 0.5 * WIDTH_M / height_m                 # the edges' slopes ds/dd: s = S0 -+ k_half d
+    return grey, horizon, edge(-k_half), edge(k_half), DetectorParams().scaled_to(camera), d_thr
+
+
+@pytest.mark.parametrize("bar", [True, False], ids=["bar and stripes", "stripes only"])
+def test_threshold_placed_at_the_bar_or_6_m_before_the_stripes(bar):
+    errors = []
+    for threshold_m in np.linspace(1000.0, 1003.0, 7):      # 0.5 px of depth: every phase of the lines
+        grey, horizon, left, right, params, d_thr = _frame(threshold_m, bar)
+        d_pavement = horizon.camera.fx * HEIGHT_M / (threshold_m - DISPLACED_M)
+        found = threshold_marking(grey, horizon, S0, left, right, d_pavement, 20.0, params.min_contrast,
+                                  surface_level=PAVEMENT, pavement_step=GRASS - PAVEMENT, params=params)
+        assert found is not None and found.line is not None, threshold_m
+        errors.append(found.line.depth_px - d_thr)
+    # 6 m here is 1.0 px of depth: a bar taken for the stripes' start is 1 px off (0.82 px at
+    # 1000 m with the threshold placed from the mean level's rise; stripes only: 0.28 px)
+    assert np.max(np.abs(errors)) <= 0.25, np.round(errors, 2)
+
+
+def test_a_threshold_on_the_stripes_start_is_told_where_the_setback_spans_a_pixel():
+    """700 m out, 52 m above the ground, the pavement 9 grey levels darker than the ground (the
+    step 'concrete, sand, mono' gives): the 0.1 widths before the stripes span 1.2 px. A
+    threshold placed where the stripes start is told (the old code read only 2 px or more);
+    one placed on the true threshold, plain pavement just inside it, is not."""
+    threshold_m, height_m = 700.0, 52.0
+    grey, horizon, left, right, params, d_thr = _frame(threshold_m, False, height_m, before_m=0.0,
+                                                       grass=PAVEMENT + 9.0)
+    d_stripes = horizon.camera.fx * height_m / (threshold_m + 6.0)
+    assert 1.0 < d_thr - d_stripes < 2.0
+    assert starts_on_its_stripes(grey, horizon, S0, left, right, d_stripes, params.min_contrast, params=params)
+    assert not starts_on_its_stripes(grey, horizon, S0, left, right, d_thr, params.min_contrast, params=params)
