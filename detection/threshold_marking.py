@@ -561,13 +561,13 @@ def starts_on_its_stripes(image, horizon: HorizonFrame, s0: float, left: PixelLi
 
     Threshold stripes start 6 m past the threshold (:data:`STRIPE_SETBACK_WIDTHS` of the widest
     runway), so the band just inside a true threshold is plain pavement. Where that band would
-    be :data:`STRIPE_SETBACK_MIN_PX` deep or more, it is read across the runway (48 columns over ``marking_column_span``):
-    a threshold placed on the stripes' start has paint and pavement side by side there (the 80th
-    and 20th percentiles of the columns' levels at least ``min_step`` apart), bright in the same
-    columns as the stripes :data:`STRIPES_INSIDE_WIDTHS` past the line (a correlation of
-    :data:`STRIPES_ALIKE` at least), and the pavement between the stripes at the ground's level
-    just before the line (within 30 % of the paint's rise over the ground): the step found is the
-    paint's, the runway begins before it.
+    be :data:`STRIPE_SETBACK_MIN_PX` deep or more, it is read across the runway (48 columns over
+    ``marking_column_span``): a threshold placed on the stripes' start has paint and pavement side
+    by side there (the 80th and 20th percentiles of the columns' levels at least ``min_step``
+    apart), bright in the same columns as the stripes :data:`STRIPES_INSIDE_WIDTHS` past the line
+    (a correlation of :data:`STRIPES_ALIKE` at least), and the pavement between the stripes at the
+    ground's level just before the line (within 30 % of the paint's rise over the ground): the
+    step found is the paint's, the runway begins before it.
     """
     params = params or DetectorParams()
     across = _across_at(horizon, s0, left, right, d_threshold)
@@ -617,16 +617,20 @@ def _rising_through(profile: np.ndarray, depths: np.ndarray, j_from: int, j_to: 
 def _stripes_start(values: np.ndarray, band: np.ndarray, depths: np.ndarray, first: int, marks_end: int,
                    j_from: int, j_to: int, min_step: float) -> float | None:
     """Depth where the stripes of the band beginning on line ``first`` begin: where the paint's
-    variation across the width (the 80th percentile of a line's samples less its 20th: the
-    stripes over the gaps between them) rises halfway from the lines before the band
-    (``marks_end`` on) to the band's own, searched from line ``j_from`` to ``j_to``.
+    variation across the width rises halfway from the lines before the band (``marks_end`` on)
+    to the band's own, searched from line ``j_from`` to ``j_to``.
 
-    A bar across adds to the stripes and the gaps alike: a displaced threshold's bar blended with
-    the stripes' first line (1.8 m wide and 4.2 m before them: a pixel or two of depth for the 6 m
-    from 650 m to 1.7 km out at 2048 px) leaves this rise where the stripes begin, while the mean
-    level rises on the bar (the threshold placed 6 m short: 1.0-1.5 px, a frame out of three, in
-    the robustness study). None when the band's stripes do not vary across the width by twice
-    ``min_step`` more than the lines before it, or it has too few lines to tell.
+    The columns (``values``: a line per row) brighter than midway between the 20th and 80th
+    percentiles of the band's own lines past its start's blur are the stripes, the others the
+    gaps between them; a line's variation is the mean of its stripe columns less the mean of its
+    gap columns. A bar across adds to both alike, even tilted against the lines by a fraction of
+    a pixel (a line's 80th percentile less its 20th rises on such a bar): a displaced threshold's
+    bar blended with the stripes' first line (1.8 m wide and 4.2 m before them: a pixel or two
+    of depth for the 6 m from 650 m to 1.7 km out at 2048 px) leaves this rise where the stripes
+    begin, while the mean level rises on the bar (the threshold placed 6 m short: 1.0-1.5 px, a
+    frame out of three, in the robustness study). None when the band's stripes do not vary
+    across the width by twice ``min_step`` more than the lines before it, or the band has under
+    four lines or no line before it.
     """
     stop = first + int(np.argmin(band[first:])) if not band[first:].all() else len(band)
     j0 = max(0, first - 6, marks_end)
