@@ -337,15 +337,19 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     band_level = float(np.nanmean(level[j_band]))
     plain_level = float(np.nanmean(level[j_plain])) if first - 1 > max(0, marks_end) else surface
     j_from, j_to = max(0, first - 4, marks_end), min(len(depths) - 1, first + 2)
-    edge = _rising_through(level * sign, depths, j_from, j_to, 0.5 * (band_level + plain_level) * sign)
-    edge = d_band if edge is None else edge
+    # stripes begin where the paint begins to vary across the width: a displaced threshold's bar
+    # 6 m before them (1.8 m wide, 4.2 m of pavement after it) blends with their first line where
+    # those 6 m span a pixel or two, and moves the mean level's rise towards the camera, but it
+    # adds to every column alike. The mean level's rise where that cannot be read, and for a bar
+    start = None
     if kind == "stripes":
-        # the threshold 6 m before the stripes, where the paint begins to vary across the width:
-        # a displaced threshold's bar 6 m before them (1.8 m wide, 4.2 m of pavement after it)
-        # blends with their first line where those 6 m span a pixel or two, and moves the mean
-        # level's rise towards the camera, but it adds to every column alike
-        stripes_from = _stripes_start(values, band, depths, first, marks_end, j_from, j_to, min_step)
-        edge = depth_along(fx, edge if stripes_from is None else stripes_from, -STRIPES_FROM_THRESHOLD_WIDTHS, width_k)
+        start = _stripes_start(values, band, depths, first, marks_end, j_from, j_to, min_step)
+    if start is None:
+        start = _rising_through(level * sign, depths, j_from, j_to, 0.5 * (band_level + plain_level) * sign)
+    edge = d_band if start is None else start
+    if kind == "stripes":
+        # the threshold 6 m before the stripes
+        edge = depth_along(fx, edge, -STRIPES_FROM_THRESHOLD_WIDTHS, width_k)
     line_h = transverse_line_h(horizon, s0, k_centre, edge)
     line = TransverseLine(line_h=line_h, corner_left_uv=meet_h(line_h, line_left),
                           corner_right_uv=meet_h(line_h, line_right), depth_px=edge,
