@@ -460,7 +460,9 @@ class DetectorParams(ParamsFile):
         runway's edge. Where on both edges this fraction of the profiles sampled across them
         (:func:`detector._past_staircase_stripes`) see such a second step beyond the edge found...
     staircase_step_ratio : float
-        ... of at least this fraction of the edge's own slope, ...
+        ... of at least this fraction of the edge's own slope (or a shoulder: the edge's own step
+        stopping short of the ground's level by ``staircase_shoulder_fraction`` of the whole step
+        or more, :func:`detector._stripe_shoulder`), ...
     staircase_max_scatter : float
         ... at a fraction of the runway's local width that is the same along each edge within this
         fraction of it (robust scatter: texture beyond the edge has none) ...
@@ -1061,6 +1063,7 @@ class DetectorParams(ParamsFile):
     hidden_stripe_max_scatter: float = 0.25
     staircase_min_fraction: float = 0.6
     staircase_step_ratio: float = 0.12
+    staircase_shoulder_fraction: float = 0.12
     staircase_max_scatter: float = 0.2
     staircase_agreement: float = 0.3
     staircase_min_px: float = 2.5
@@ -1284,6 +1287,7 @@ class DetectorParams(ParamsFile):
         "boundary_stripe_shift_scale_px": (0.01, 100.0), "hidden_stripe_min_fraction": (0.0, 1.0),
         "hidden_stripe_min_px": (0.0, 100.0), "hidden_stripe_tolerance": (0.0, 1.0),
         "hidden_stripe_max_scatter": (0.0, 10.0), "staircase_min_fraction": (0.0, 1.0), "staircase_step_ratio": (0.0, 10.0),
+        "staircase_shoulder_fraction": (0.0, 1.0),
         "staircase_near_min_profiles": (3, 1000, "int"), "staircase_near_fraction": (0.0, 1.0),
         "staircase_near_scatter": (0.0, 10.0), "staircase_far_max_fraction": (0.0, 1.0),
         "staircase_max_scatter": (0.0, 10.0), "staircase_agreement": (0.0, 10.0), "staircase_min_px": (0.0, 1000.0), "net_step_outside_px": (0.0, 100.0), "net_step_inside_px": (0.0, 100.0),

@@ -222,3 +222,39 @@ def test_a_stripe_seen_on_the_near_part_of_an_edge_only():
     spread = ratios_at(resolved[-6:])
     spread[resolved[-6:]] = median * np.array([0.7, 1.3, 0.8, 1.25, 0.75, 1.2])          # not paint-regular
     assert not _seen_near_only(spread, width, median, params)
+
+
+def _area_sampled_staircase(offsets: np.ndarray, levels, steps_px, blur_px: float) -> np.ndarray:
+    """Grey levels at ``offsets`` across steps at ``steps_px`` between ``levels`` (one more level
+    than steps), each pixel the mean over its width, then a Gaussian blur of ``blur_px`` (by a
+    fine sum): an independent model of a rendered edge."""
+    fine = np.linspace(-12.0, 12.0, 4801)
+    truth = np.full(fine.shape, float(levels[0]))
+    for at, level in zip(steps_px, levels[1:]):
+        truth[fine >= at] = level
+    kernel_x = np.arange(-4.0 * blur_px, 4.0 * blur_px + 1e-9, fine[1] - fine[0])
+    kernel = np.exp(-0.5 * (kernel_x / blur_px) ** 2)
+    blurred = np.convolve(truth, kernel / kernel.sum(), mode="same")
+    box = np.abs(fine[:, None] - offsets[None, :]) <= 0.5                 # a pixel's area around each sample
+    return (blurred[:, None] * box).sum(axis=0) / box.sum(axis=0)
+
+
+@pytest.mark.parametrize("stripe_px", [2.5, 3.0, 4.0, 5.0])
+def test_a_stripe_blurred_into_the_step_onto_it_is_seen_as_a_shoulder(stripe_px):
+    """:func:`detector._stripe_shoulder`: asphalt (72), a side stripe ``stripe_px`` wide (196),
+    snow (232), area-sampled and blurred (0.6 px): the stripe's end, the runway's edge, is found
+    within 0.35 px; a plain step of the same height, blurred the same way, shows none."""
+    from visland.detection.detector import _stripe_shoulder
+    params = DetectorParams()
+    offsets = np.arange(-8.0, 9.0, 0.5)
+    reach = np.array([0.04 * 140.0 + params.edge_blur_px])
+    staircase = _area_sampled_staircase(offsets, (72.0, 196.0, 232.0), (0.0, stripe_px), 0.6)[None, :]
+    plain = _area_sampled_staircase(offsets, (72.0, 232.0), (0.0,), 0.6)[None, :]
+    for profile, expected in ((staircase, stripe_px), (plain, None)):
+        slope = np.gradient(profile[0], 0.5)
+        column = np.array([int(np.argmax(np.where(np.abs(offsets) <= params.edge_blur_px, slope, -np.inf)))])
+        found = _stripe_shoulder(profile, offsets, column, np.array([slope[column[0]]]), reach, params)[0]
+        if expected is None:
+            assert np.isnan(found)
+        else:
+            assert abs(found - expected) < 0.35, (found, expected)
