@@ -44,12 +44,19 @@ fields, runway size, lens), e.g. the sensor condition's parts one at a time::
 
     --define 'JPEG 50' '{"jpeg_quality": 50}' --define 'blur 1 px' '{"blur_sigma_px": 1.0}' \\
         --conditions 'JPEG 50' 'blur 1 px'
+
+``--conditions 'variety N'`` takes the scene drawn from seed N
+(:func:`visland.render.variety.draw_variety`) for any N: the study's own are draws 1-3, and the
+detector has been looked at on them; other draws are scenes it was not tuned on::
+
+    --conditions 'variety 4' 'variety 5' 'variety 6' 'variety 7' 'variety 8' 'variety 9' 'variety 10'
 """
 from __future__ import annotations
 
 import argparse
 import csv
 import json
+import re
 import math
 import os
 import sys
@@ -297,11 +304,23 @@ def defined_condition(text: str) -> tuple:
     return (float(runway.length_m), float(runway.width_m)), spec, distortion
 
 
+def add_varieties(names) -> list[str]:
+    """Add to :data:`CONDITIONS` each name of ``names`` of the form 'variety N' that it lacks: the
+    scene drawn from seed N (:func:`condition_setup`, :func:`visland.render.variety.draw_variety`).
+    Returns the names added."""
+    added = [name for name in names if name not in CONDITIONS and re.fullmatch(r"variety [0-9]+", name)]
+    for name in added:
+        CONDITIONS[name] = "variety"
+    return added
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--size", type=int, default=1024)
     parser.add_argument("--fps", type=float, default=5.0)
-    parser.add_argument("--conditions", nargs="+", default=list(CONDITIONS), help="names from CONDITIONS")
+    parser.add_argument("--conditions", nargs="+", default=list(CONDITIONS),
+                        help="names from CONDITIONS, or 'variety N': the scene drawn from seed N "
+                             "(visland.render.variety.draw_variety; draws other than 1-3 are held out)")
     parser.add_argument("--scenario", default="thesis-3")
     parser.add_argument("--work", default="/tmp/detection_robustness_approach",
                         help="folder of the datasets (metadata only) and runs, one sub-folder per condition")
@@ -320,6 +339,7 @@ def main(argv=None) -> int:
             CONDITIONS[name] = defined_condition(text)
         except ValueError as error:
             parser.error(f"--define {name!r}: {error}")
+    add_varieties(args.conditions)
     unknown = [c for c in args.conditions if c not in CONDITIONS]
     if unknown:
         parser.error(f"unknown conditions {unknown}; known: {', '.join(CONDITIONS)}")

@@ -242,19 +242,22 @@ def _area_sampled_staircase(offsets: np.ndarray, levels, steps_px, blur_px: floa
 @pytest.mark.parametrize("stripe_px", [2.5, 3.0, 4.0, 5.0])
 def test_a_stripe_blurred_into_the_step_onto_it_is_seen_as_a_shoulder(stripe_px):
     """:func:`detector._stripe_shoulder`: asphalt (72), a side stripe ``stripe_px`` wide (196),
-    snow (232), area-sampled and blurred (0.6 px): the stripe's end, the runway's edge, is found
-    within 0.35 px; a plain step of the same height, blurred the same way, shows none."""
+    snow (232), area-sampled and blurred (0.4 to 0.9 px): the stripe's end, the runway's edge, is
+    found within 0.35 px; a plain step of the same height, blurred by 0.3 to 1.2 px at four
+    sub-pixel phases, shows none."""
     from visland.detection.detector import _stripe_shoulder
     params = DetectorParams()
     offsets = np.arange(-8.0, 9.0, 0.5)
     reach = np.array([0.04 * 140.0 + params.edge_blur_px])
-    staircase = _area_sampled_staircase(offsets, (72.0, 196.0, 232.0), (0.0, stripe_px), 0.6)[None, :]
-    plain = _area_sampled_staircase(offsets, (72.0, 232.0), (0.0,), 0.6)[None, :]
-    for profile, expected in ((staircase, stripe_px), (plain, None)):
-        slope = np.gradient(profile[0], 0.5)
+
+    def shoulder(profile):
+        slope = np.gradient(profile, 0.5)
         column = np.array([int(np.argmax(np.where(np.abs(offsets) <= params.edge_blur_px, slope, -np.inf)))])
-        found = _stripe_shoulder(profile, offsets, column, np.array([slope[column[0]]]), reach, params)[0]
-        if expected is None:
-            assert np.isnan(found)
-        else:
-            assert abs(found - expected) < 0.35, (found, expected)
+        return _stripe_shoulder(profile[None, :], offsets, column, np.array([slope[column[0]]]), reach, params)[0]
+
+    for blur in (0.4, 0.6, 0.9):
+        found = shoulder(_area_sampled_staircase(offsets, (72.0, 196.0, 232.0), (0.0, stripe_px), blur))
+        assert abs(found - stripe_px) < 0.35, (blur, found)
+    for blur in (0.3, 0.6, 0.9, 1.2):
+        for phase in (0.0, 0.125, 0.25, 0.375):
+            assert np.isnan(shoulder(_area_sampled_staircase(offsets, (72.0, 232.0), (phase,), blur))), (blur, phase)

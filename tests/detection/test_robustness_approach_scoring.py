@@ -141,3 +141,18 @@ def test_define_makes_a_condition_of_ones_own_and_names_what_is_wrong(study):
                         ('{"no_such_field": 1}', "no_such_field"), ('{"jpeg_quality": 500}', "jpeg_quality")):
         with pytest.raises(ValueError, match=words):
             study.defined_condition(text)
+
+
+def test_any_variety_draw_names_a_condition(study):
+    """'variety N' is the scene drawn from seed N: draws other than the study's own 1-3 are scenes
+    the detector was not tuned on (held out)."""
+    from visland.render.variety import draw_variety
+    try:
+        assert study.add_varieties(["variety 7", "baseline 3000x45", "variety seven", "variety 1"]) == ["variety 7"]
+        runway, scene, lens = study.condition_setup("variety 7")
+        drawn = draw_variety(7)
+        assert (runway.length_m, runway.width_m) == (drawn.runway_length_m, drawn.runway_width_m)
+        assert scene == drawn.scene and lens is None
+        assert scene != study.condition_setup("variety 1")[1]
+    finally:
+        study.CONDITIONS.pop("variety 7", None)
