@@ -1055,7 +1055,8 @@ def _across_edge(segment_uv: np.ndarray, other_uv: np.ndarray):
     return points, direction, outward, width
 
 
-def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams):
+def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams,
+                      shoulders: bool = True):
     """Where a second grey-level step of the edge's own sign lies beyond the edge ``segment_uv``,
     as a fraction of the runway's local width, at each of :data:`BALANCE_PROFILES` points:
     ``(ratios, width_px, points, outward)``, NaN where a profile has none, the runway's width at
@@ -1095,9 +1096,10 @@ def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, param
     j = np.argmax(candidate, axis=1)
     found = np.isfinite(candidate[rows, j])
     ratios = np.where(found, (offsets[j] + parabola_peak(same, j) * step) / width, np.nan)
-    shoulder = _stripe_shoulder(sign[:, None] * profiles, offsets, np.flatnonzero(at_edge)[strongest], edge_slope,
-                                reach, params)
-    ratios = np.where(~found & (shoulder >= 2.0) & (shoulder <= reach), shoulder / width, ratios)
+    if shoulders:
+        shoulder = _stripe_shoulder(sign[:, None] * profiles, offsets, np.flatnonzero(at_edge)[strongest],
+                                    edge_slope, reach, params)
+        ratios = np.where(~found & (shoulder >= 2.0) & (shoulder <= reach), shoulder / width, ratios)
     return ratios, width, points, outward
 
 
@@ -1242,31 +1244,14 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
         if any(abs(end[2]) < 1e-12 for end in ends):
             return fits
         segments[name] = np.array([end[:2] / end[2] for end in ends])
-    medians, seen_on, where = [], {}, ""
-    for name, other in (("left", "right"), ("right", "left")):
-        seen = seen_on[name] = _staircase_ratios(ctx.image, segments[name], segments[other], params)
-        if seen is None:
-            return fits
-        ratios, width, _, _ = seen
-        held = np.isfinite(ratios)
-        if held.sum() < 3:
-            return fits
-        median = float(np.median(ratios[held]))
-        scatter = float(np.median(np.abs(ratios[held] - median)))
-        # counted where a stripe that wide is resolved (its width grows along the edge: far
-        # out it merges with the step onto it)
-        resolved = width * median >= params.staircase_min_px
-        if not (0.0 < median <= params.side_stripe_width_fraction and scatter <= params.staircase_max_scatter * median
-                and resolved.sum() >= 3):
-            return fits
-        if (held & resolved).sum() < params.staircase_min_fraction * resolved.sum():
-            if not _seen_near_only(ratios, width, median, params):
-                return fits
-            where = "the near parts of "
-        medians.append(median)
-    if abs(medians[0] - medians[1]) > params.staircase_agreement * max(medians):
+    # the second steps' peaks first; their shoulders too only where the peaks alone do not make
+    # a staircase (shoulders read on levels are looser: on 'snow, monochrome' at 133 m, 2048 px,
+    # adding them to peaks that made one spread the ratios past the scatter allowed)
+    staircase = (_staircase_seen(ctx.image, segments, params, shoulders=False)
+                 or _staircase_seen(ctx.image, segments, params, shoulders=True))
+    if staircase is None:
         return fits
-    ratio = 0.5 * (medians[0] + medians[1])
+    seen_on, ratio, where = staircase
     moved = {}
     for name, other in (("left", "right"), ("right", "left")):
         fit = fits[name]
@@ -1299,6 +1284,40 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
                               extent=(float(along.min()), float(along.max())),
                               note="; ".join(filter(None, [fit.note, note])))
     return moved
+
+
+def _staircase_seen(image, segments: dict, params: DetectorParams, shoulders: bool):
+    """The staircase rule's verdict (:func:`_past_staircase_stripes`) on the two edges'
+    ``segments`` (pixel ends, far and near): ``(seen_on, ratio, where)``, each edge's
+    :func:`_staircase_ratios`, the stripe's width as a fraction of the runway's (the two edges'
+    medians' mean) and the note's "the near parts of " when an edge counted by
+    :func:`_seen_near_only`; None when the steps do not make a side stripe. ``shoulders``: the
+    second steps read as shoulders too (:func:`_stripe_shoulder`), not only as peaks."""
+    medians, seen_on, where = [], {}, ""
+    for name, other in (("left", "right"), ("right", "left")):
+        seen = seen_on[name] = _staircase_ratios(image, segments[name], segments[other], params, shoulders)
+        if seen is None:
+            return None
+        ratios, width, _, _ = seen
+        held = np.isfinite(ratios)
+        if held.sum() < 3:
+            return None
+        median = float(np.median(ratios[held]))
+        scatter = float(np.median(np.abs(ratios[held] - median)))
+        # counted where a stripe that wide is resolved (its width grows along the edge: far
+        # out it merges with the step onto it)
+        resolved = width * median >= params.staircase_min_px
+        if not (0.0 < median <= params.side_stripe_width_fraction and scatter <= params.staircase_max_scatter * median
+                and resolved.sum() >= 3):
+            return None
+        if (held & resolved).sum() < params.staircase_min_fraction * resolved.sum():
+            if not _seen_near_only(ratios, width, median, params):
+                return None
+            where = "the near parts of "
+        medians.append(median)
+    if abs(medians[0] - medians[1]) > params.staircase_agreement * max(medians):
+        return None
+    return seen_on, 0.5 * (medians[0] + medians[1]), where
 
 
 def _stripe_reach_and_band(width: np.ndarray, params: DetectorParams) -> tuple[np.ndarray, np.ndarray]:

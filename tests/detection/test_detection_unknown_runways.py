@@ -158,11 +158,11 @@ def test_side_stripes_resolved_on_the_edges_near_parts_only():
     stripes (0.9 m) are 3-4 px wide near the bottom of the frame and merge with the step onto
     them farther up, so only the nearest profiles see the step onto the snow (too few for the
     whole-edge rule) and the edge found, mixed, is turned: 5.3 px in, the near corners 5.3-6.0 px
-    off with confidence 0.65. The step onto the snow, a shoulder of the step onto the paint
-    rather than a peak of its own (:func:`detector._stripe_shoulder`), is seen wherever the
-    stripe is resolved, and both edges move past it: within a pixel. Without the shoulders, it is
-    seen as a stripe resolved on the near parts only (:func:`detector._seen_near_only`): within
-    a pixel too."""
+    off with confidence 0.65. Seen as a stripe resolved on the near parts only
+    (:func:`detector._seen_near_only`), both edges move past it: within a pixel. Without that
+    rule, the step onto the snow, a shoulder of the step onto the paint rather than a peak of its
+    own (:func:`detector._stripe_shoulder`), is seen wherever the stripe is resolved, and both
+    edges move past it by the whole-edge rule: within a pixel too."""
     camera = CameraModel.default(1024)
     runway = Runway(length_m=2600.0, width_m=40.0)
     scene = PaintedAirport(seed=3, runway_length_m=2600.0, runway_width_m=40.0, grass_grey=232.0,
@@ -170,17 +170,17 @@ def test_side_stripes_resolved_on_the_edges_near_parts_only():
     image, state, labels = airport_frame("thesis-1", 310.0, camera, scene, runway=runway)
     roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
     result = detect_runway(image, camera, roll, pitch)
-    assert result.found and "a staircase beyond both edges" in result.reason, result.reason
+    assert result.found and "beyond the near parts of both edges" in result.reason, result.reason
     near, edge = _errors(result, camera, labels)
     assert edge < 1.0
     assert result.corners_found[:2].all() and near.max() < 1.0, (near, result.reason)
-    peaks_only = DetectorParams(staircase_shoulder_fraction=1.0)
-    near_parts = detect_runway(image, camera, roll, pitch, params=peaks_only)
-    assert near_parts.found and "beyond the near parts of both edges" in near_parts.reason, near_parts.reason
-    near, edge = _errors(near_parts, camera, labels)
+    whole_edge = DetectorParams(staircase_near_min_profiles=1000)
+    shoulders = detect_runway(image, camera, roll, pitch, params=whole_edge)
+    assert shoulders.found and "a staircase beyond both edges" in shoulders.reason, shoulders.reason
+    near, edge = _errors(shoulders, camera, labels)
     assert edge < 1.0
-    assert near_parts.corners_found[:2].all() and near.max() < 1.0, (near, near_parts.reason)
-    turned = detect_runway(image, camera, roll, pitch, params=replace(peaks_only, staircase_near_min_profiles=1000))
+    assert shoulders.corners_found[:2].all() and near.max() < 1.0, (near, shoulders.reason)
+    turned = detect_runway(image, camera, roll, pitch, params=replace(whole_edge, staircase_shoulder_fraction=1.0))
     assert _errors(turned, camera, labels)[1] > 4.0
 
 
