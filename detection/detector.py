@@ -24,7 +24,6 @@ from __future__ import annotations
 import functools
 import math
 import time
-import warnings
 from dataclasses import dataclass, replace
 
 import cv2
@@ -1055,11 +1054,11 @@ def _across_edge(segment_uv: np.ndarray, other_uv: np.ndarray):
     return points, direction, outward, width
 
 
-def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams,
-                      shoulders: bool = True):
+def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, params: DetectorParams):
     """Where a second grey-level step of the edge's own sign lies beyond the edge ``segment_uv``,
     as a fraction of the runway's local width, at each of :data:`BALANCE_PROFILES` points:
-    ``(ratios, width_px, points, outward)``, NaN where a profile has none, the runway's width at
+    ``(ratios, width_px, points, outward, with_shoulders)``, NaN where a profile has none, the
+    runway's width at
     each point, the points (n, 2) and the edge's outward unit normal (:func:`_across_edge`).
     None when the segments are too short to sample or the runway too narrow for the widest
     stripe looked for to be ``staircase_min_px`` wide.
@@ -1096,11 +1095,11 @@ def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, param
     j = np.argmax(candidate, axis=1)
     found = np.isfinite(candidate[rows, j])
     ratios = np.where(found, (offsets[j] + parabola_peak(same, j) * step) / width, np.nan)
-    if shoulders:
-        shoulder = _stripe_shoulder(sign[:, None] * profiles, offsets, np.flatnonzero(at_edge)[strongest],
-                                    edge_slope, reach, params)
-        ratios = np.where(~found & (shoulder >= 2.0) & (shoulder <= reach), shoulder / width, ratios)
-    return ratios, width, points, outward
+    # (and the ratios with the shoulders read where the slope makes no peak)
+    shoulder = _stripe_shoulder(sign[:, None] * profiles, offsets, np.flatnonzero(at_edge)[strongest], edge_slope,
+                                reach, params)
+    with_shoulders = np.where(~found & (shoulder >= 2.0) & (shoulder <= reach), shoulder / width, ratios)
+    return ratios, width, points, outward, with_shoulders
 
 
 def _stripe_shoulder(rising: np.ndarray, offsets: np.ndarray, edge_column: np.ndarray, edge_slope: np.ndarray,
@@ -1136,10 +1135,8 @@ def _stripe_shoulder(rising: np.ndarray, offsets: np.ndarray, edge_column: np.nd
     paint = rising[rows, lobe_end]
     beyond = (offsets[None, :] > reach[:, None] + 0.5) & (offsets[None, :] <= reach[:, None] + 2.5)
     inside = (offsets >= -3.0) & (offsets <= -1.5)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)            # a profile all outside the frame: NaN
-        ground = np.nanmedian(np.where(beyond, rising, np.nan), axis=1)
-        pavement = np.nanmedian(rising[:, inside], axis=1) if inside.any() else np.full(n, np.nan)
+    ground = row_nanmedian(np.where(beyond, rising, np.nan))
+    pavement = row_nanmedian(rising[:, inside]) if inside.any() else np.full(n, np.nan)
     whole = ground - pavement
     with np.errstate(invalid="ignore"):
         shoulder = (past_lobe.any(axis=1) & (whole > 0.0)
@@ -1152,6 +1149,19 @@ def _stripe_shoulder(rising: np.ndarray, offsets: np.ndarray, edge_column: np.nd
     with np.errstate(invalid="ignore", divide="ignore"):
         fraction = np.clip((midway - before) / (after - before), 0.0, 1.0)
     return np.where(shoulder, offsets[np.clip(at - 1, 0, m - 1)] + step * fraction, np.nan)
+
+
+def row_nanmedian(values: np.ndarray) -> np.ndarray:
+    """``np.nanmedian(values, axis=1)`` to the last bit (the mean of the two middle values of an
+    even count), NaN for a row with no finite value and without the warning; a third of its
+    time on the detector's (24, 30) profiles, sorted once instead of partitioned row by row."""
+    ordered = np.sort(values, axis=1)                          # NaN sort last
+    count = np.count_nonzero(~np.isnan(ordered), axis=1)
+    rows = np.arange(len(ordered))
+    last = max(ordered.shape[1] - 1, 0)
+    low = ordered[rows, np.clip((count - 1) // 2, 0, last)]
+    high = ordered[rows, np.clip(count // 2, 0, last)]
+    return np.where(count > 0, (low + high) / 2.0, np.nan)
 
 
 def _seen_near_only(ratios: np.ndarray, width: np.ndarray, median: float, params: DetectorParams) -> bool:
@@ -1247,8 +1257,12 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
     # the second steps' peaks first; their shoulders too only where the peaks alone do not make
     # a staircase (shoulders read on levels are looser: on 'snow, monochrome' at 133 m, 2048 px,
     # adding them to peaks that made one spread the ratios past the scatter allowed)
-    staircase = (_staircase_seen(ctx.image, segments, params, shoulders=False)
-                 or _staircase_seen(ctx.image, segments, params, shoulders=True))
+    read = {}
+    for name, other in (("left", "right"), ("right", "left")):
+        read[name] = _staircase_ratios(ctx.image, segments[name], segments[other], params)
+        if read[name] is None:
+            return fits
+    staircase = _staircase_seen(read, params, shoulders=False) or _staircase_seen(read, params, shoulders=True)
     if staircase is None:
         return fits
     seen_on, ratio, where = staircase
@@ -1286,19 +1300,19 @@ def _past_staircase_stripes(ctx: _Context, fits: dict) -> dict:
     return moved
 
 
-def _staircase_seen(image, segments: dict, params: DetectorParams, shoulders: bool):
-    """The staircase rule's verdict (:func:`_past_staircase_stripes`) on the two edges'
-    ``segments`` (pixel ends, far and near): ``(seen_on, ratio, where)``, each edge's
-    :func:`_staircase_ratios`, the stripe's width as a fraction of the runway's (the two edges'
-    medians' mean) and the note's "the near parts of " when an edge counted by
-    :func:`_seen_near_only`; None when the steps do not make a side stripe. ``shoulders``: the
-    second steps read as shoulders too (:func:`_stripe_shoulder`), not only as peaks."""
+def _staircase_seen(read: dict, params: DetectorParams, shoulders: bool):
+    """The staircase rule's verdict (:func:`_past_staircase_stripes`) on the two edges' second
+    steps ``read`` (:func:`_staircase_ratios` of "left" and "right"): ``(seen_on, ratio, where)``,
+    each edge's ``(ratios, width, points, outward)``, the stripe's width as a fraction of the
+    runway's (the two edges' medians' mean) and the note's "the near parts of " when an edge
+    counted by :func:`_seen_near_only`; None when the steps do not make a side stripe.
+    ``shoulders``: the second steps read as shoulders too (:func:`_stripe_shoulder`), not only
+    as peaks."""
     medians, seen_on, where = [], {}, ""
-    for name, other in (("left", "right"), ("right", "left")):
-        seen = seen_on[name] = _staircase_ratios(image, segments[name], segments[other], params, shoulders)
-        if seen is None:
-            return None
-        ratios, width, _, _ = seen
+    for name in ("left", "right"):
+        peaks, width, points, outward, with_shoulders = read[name]
+        ratios = with_shoulders if shoulders else peaks
+        seen_on[name] = (ratios, width, points, outward)
         held = np.isfinite(ratios)
         if held.sum() < 3:
             return None

@@ -261,3 +261,18 @@ def test_a_stripe_blurred_into_the_step_onto_it_is_seen_as_a_shoulder(stripe_px)
     for blur in (0.3, 0.6, 0.9, 1.2):
         for phase in (0.0, 0.125, 0.25, 0.375):
             assert np.isnan(shoulder(_area_sampled_staircase(offsets, (72.0, 232.0), (phase,), blur))), (blur, phase)
+
+
+def test_row_nanmedian_is_numpys_to_the_last_bit():
+    """:func:`detector.row_nanmedian` gives ``np.nanmedian(values, axis=1)`` exactly, rows all NaN
+    included (NaN), on random rows of every length with ties and gaps."""
+    import warnings
+    from visland.detection.detector import row_nanmedian
+    rng = np.random.default_rng(11)
+    for _ in range(500):
+        values = rng.normal(100.0, 20.0, (int(rng.integers(1, 30)), int(rng.integers(1, 40)))).round(int(rng.integers(0, 3)))
+        values[rng.random(values.shape) < rng.random()] = np.nan
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            expected = np.nanmedian(values, axis=1)
+        assert np.array_equal(row_nanmedian(values), expected, equal_nan=True)
