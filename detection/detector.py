@@ -1153,7 +1153,7 @@ def _stripe_shoulder(rising: np.ndarray, offsets: np.ndarray, edge_column: np.nd
 
 def row_nanmedian(values: np.ndarray) -> np.ndarray:
     """``np.nanmedian(values, axis=1)`` to the last bit (the mean of the two middle values of an
-    even count), NaN for a row with no finite value and without the warning; a third of its
+    even count), NaN for a row with no finite value and without the warning; a seventh of its
     time on the detector's (24, 30) profiles, sorted once instead of partitioned row by row."""
     ordered = np.sort(values, axis=1)                          # NaN sort last
     count = np.count_nonzero(~np.isnan(ordered), axis=1)
