@@ -33,7 +33,7 @@ from visland.camera import CameraModel
 from visland.detection.candidates import banded_hough_segments, candidate_lines, check_lines, hough_segments
 from visland.detection.horizon import HorizonFrame, horizon_frame, widths_along
 from visland.detection.params import DetectorParams
-from visland.detection.pencil import FloatFrame
+from visland.detection.pencil import FloatFrame, row_nanmedian
 from visland.detection.refine import (LineFit, NoFit, PixelLine, chroma_boundary, chroma_of,
                                      net_step, parabola_peak, refine_line, sample_profiles)
 from visland.detection.result import DetectionResult, not_found
@@ -1096,20 +1096,21 @@ def _staircase_ratios(image, segment_uv: np.ndarray, other_uv: np.ndarray, param
     found = np.isfinite(candidate[rows, j])
     ratios = np.where(found, (offsets[j] + parabola_peak(same, j) * step) / width, np.nan)
     # (and the ratios with the shoulders read where the slope makes no peak)
-    shoulder = _stripe_shoulder(sign[:, None] * profiles, offsets, np.flatnonzero(at_edge)[strongest], edge_slope,
-                                reach, params)
+    shoulder = _stripe_shoulder(sign[:, None] * profiles, same, offsets, np.flatnonzero(at_edge)[strongest],
+                                edge_slope, reach, params)
     with_shoulders = np.where(~found & (shoulder >= 2.0) & (shoulder <= reach), shoulder / width, ratios)
     return ratios, width, points, outward, with_shoulders
 
 
-def _stripe_shoulder(rising: np.ndarray, offsets: np.ndarray, edge_column: np.ndarray, edge_slope: np.ndarray,
-                     reach: np.ndarray, params: DetectorParams) -> np.ndarray:
+def _stripe_shoulder(rising: np.ndarray, slope: np.ndarray, offsets: np.ndarray, edge_column: np.ndarray,
+                     edge_slope: np.ndarray, reach: np.ndarray, params: DetectorParams) -> np.ndarray:
     """Where a side stripe blurred into the step onto it ends, in each profile (offset, pixels;
     NaN where the profile shows no such stripe): the second step of a staircase
     (:func:`_staircase_ratios`) that makes no peak of the slope of its own but a shoulder.
 
     ``rising`` are the profiles signed so that they rise outwards (the edge's own sign),
-    sampled at ``offsets`` (0.5 px apart, 0 on the edge); ``edge_column`` the column of each
+    sampled at ``offsets`` (0.5 px apart, 0 on the edge), ``slope`` their central difference
+    per pixel (0 at the ends and where a profile leaves the frame); ``edge_column`` the column of each
     edge's strongest slope, ``edge_slope`` that slope; ``reach`` the widest stripe looked for
     plus the blur (pixels). The edge's own lobe ends where its slope falls below half its peak:
     a plain step has risen there to within 0.002-0.11 of the whole step of its outside level
@@ -1128,8 +1129,6 @@ def _stripe_shoulder(rising: np.ndarray, offsets: np.ndarray, edge_column: np.nd
     step = float(offsets[1] - offsets[0]) if m > 1 else 1.0
     rows = np.arange(n)
     columns = np.arange(m)[None, :]
-    slope = np.zeros(rising.shape)
-    slope[:, 1:-1] = np.nan_to_num((rising[:, 2:] - rising[:, :-2]) / (2.0 * step))
     past_lobe = (slope < 0.5 * edge_slope[:, None]) & (columns > edge_column[:, None])
     lobe_end = np.argmax(past_lobe, axis=1)
     paint = rising[rows, lobe_end]
@@ -1149,19 +1148,6 @@ def _stripe_shoulder(rising: np.ndarray, offsets: np.ndarray, edge_column: np.nd
     with np.errstate(invalid="ignore", divide="ignore"):
         fraction = np.clip((midway - before) / (after - before), 0.0, 1.0)
     return np.where(shoulder, offsets[np.clip(at - 1, 0, m - 1)] + step * fraction, np.nan)
-
-
-def row_nanmedian(values: np.ndarray) -> np.ndarray:
-    """``np.nanmedian(values, axis=1)`` to the last bit (the mean of the two middle values of an
-    even count), NaN for a row with no finite value and without the warning; a seventh of its
-    time on the detector's (24, 30) profiles, sorted once instead of partitioned row by row."""
-    ordered = np.sort(values, axis=1)                          # NaN sort last
-    count = np.count_nonzero(~np.isnan(ordered), axis=1)
-    rows = np.arange(len(ordered))
-    last = max(ordered.shape[1] - 1, 0)
-    low = ordered[rows, np.clip((count - 1) // 2, 0, last)]
-    high = ordered[rows, np.clip(count // 2, 0, last)]
-    return np.where(count > 0, (low + high) / 2.0, np.nan)
 
 
 def _seen_near_only(ratios: np.ndarray, width: np.ndarray, median: float, params: DetectorParams) -> bool:

@@ -253,7 +253,10 @@ def test_a_stripe_blurred_into_the_step_onto_it_is_seen_as_a_shoulder(stripe_px)
     def shoulder(profile):
         slope = np.gradient(profile, 0.5)
         column = np.array([int(np.argmax(np.where(np.abs(offsets) <= params.edge_blur_px, slope, -np.inf)))])
-        return _stripe_shoulder(profile[None, :], offsets, column, np.array([slope[column[0]]]), reach, params)[0]
+        central = np.zeros((1, len(profile)))                 # as the detector reads it: 0 at the ends
+        central[0, 1:-1] = (profile[2:] - profile[:-2]) / 1.0
+        return _stripe_shoulder(profile[None, :], central, offsets, column, np.array([slope[column[0]]]), reach,
+                                params)[0]
 
     for blur in (0.4, 0.6, 0.9):
         found = shoulder(_area_sampled_staircase(offsets, (72.0, 196.0, 232.0), (0.0, stripe_px), blur))
@@ -264,10 +267,10 @@ def test_a_stripe_blurred_into_the_step_onto_it_is_seen_as_a_shoulder(stripe_px)
 
 
 def test_row_nanmedian_is_numpys_to_the_last_bit():
-    """:func:`detector.row_nanmedian` gives ``np.nanmedian(values, axis=1)`` exactly, rows all NaN
+    """:func:`pencil.row_nanmedian` gives ``np.nanmedian(values, axis=1)`` exactly, rows all NaN
     included (NaN), on random rows of every length with ties and gaps."""
     import warnings
-    from visland.detection.detector import row_nanmedian
+    from visland.detection.pencil import row_nanmedian
     rng = np.random.default_rng(11)
     for _ in range(500):
         values = rng.normal(100.0, 20.0, (int(rng.integers(1, 30)), int(rng.integers(1, 40)))).round(int(rng.integers(0, 3)))
