@@ -243,6 +243,16 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     maps = (np.where(inside, grid[..., 0], -1).astype(np.float32), np.where(inside, grid[..., 1], -1).astype(np.float32))
     values = remap_inside(image, maps[0], maps[1], inside, cv2.BORDER_CONSTANT, np.nan)
     values = np.where(inside & rows_ok[:, None], values, np.nan)
+    if pavement_step < 0.0 and not unresolved:
+        # a ground brighter than the pavement blurs into its first lines: those that only decay
+        # from it are no marking (a band of them was taken for a bar at the pavement's start)
+        skip = _ground_blur_lines(row_mean(values), min_step)
+        rows_ok[:skip] = False
+        values[:skip] = np.nan
+        if rows_ok.sum() < 8:
+            return None
+    else:
+        skip = 0
     ok = values[rows_ok]
     if math.isfinite(surface_level):
         surface = surface_level
@@ -295,6 +305,19 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
                 doubtful = ThresholdMarking(line=None, kind="unresolved",
                                             pavement_widths=float(widths_along(fx, d_pavement, depths[j], width_k)))
                 break
+    if skip:
+        # past the blur, the first line brighter than the pavement by the frame's least step is the
+        # first marking inside it, as when unresolved (above): a band farther in is another mark
+        plain = float(np.nanmedian(level[rows_ok]))
+        rising = rows_ok & (depths <= depths[skip] - ONE_LINE_PX) & (level - plain >= min_step)
+        if rising.any():
+            d_first_rise = float(depths[np.nonzero(rising)[0][0]])
+            if d_first_rise < d_start_reach:
+                # past where a threshold at the pavement's start shows its stripes: paved ground
+                # before a marking (a blast pad's 127 m of asphalt beside snow, 2048 px at 2.3 km:
+                # the threshold placed where it begins, 8-9 px short, from 2.6 to 1.3 km)
+                doubtful = doubtful or ThresholdMarking(line=None, kind="unresolved", pavement_widths=float(
+                    widths_along(fx, d_pavement, d_first_rise, width_k)))
     if not contrast >= max(2.0 * min_step, abs(pavement_step)):
         return doubtful
     marked = np.nan_to_num((values - surface) * sign, nan=-1.0) > 0.5 * contrast
@@ -450,6 +473,20 @@ STRIPES_INSIDE_WIDTHS = (0.3, 0.5)
 #: Correlation across the runway's columns between the band before the stripes and the stripes
 #: at least this high: the band holds the same stripes.
 STRIPES_ALIKE = 0.7
+
+
+def _ground_blur_lines(level: np.ndarray, min_step: float) -> int:
+    """How many of the first lines inside a pavement, read from its start inwards (``level``:
+    their means, NaN where not read), only decay from a brighter ground's level: each over the
+    median line by ``min_step`` at least and under the line before by ``min_step`` / 2 or a
+    fifth of its excess at least. Paint holds its level from one line to the next."""
+    plain = float(np.nanmedian(level))
+    excess = level - plain
+    count = 0
+    while count < len(excess) and excess[count] >= min_step and (
+            count == 0 or excess[count] <= excess[count - 1] - max(0.5 * min_step, 0.2 * excess[count - 1])):
+        count += 1
+    return count if count >= 2 else 0
 
 
 def _marks_across(marked: np.ndarray, params: DetectorParams) -> tuple[np.ndarray, np.ndarray]:
