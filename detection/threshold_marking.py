@@ -129,7 +129,13 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         The pavement's own grey level between markings (else the median of the rows read).
     pavement_step : float, optional
         Grey-level step from the ground to the pavement where it begins: markings must be
-        brighter than the pavement by at least as much.
+        brighter than the pavement by at least as much. Negative (a ground brighter than the
+        pavement, resolved): the first lines that only decay from the ground's level are its
+        blur, not a marking (:func:`_ground_blur_lines`), and past them the first line brighter
+        than the pavement by ``min_step``, beyond where a threshold at the pavement's start shows
+        its stripes, makes the threshold doubtful (kind ``"unresolved"``): a blast pad's asphalt
+        beside snow, held-out draw 12 at 2048 px, read its start as a bar and kept the threshold
+        there, 8-9 px short.
     min_pavement_widths, max_pavement_widths : float
         The marking must begin between these many runway widths inside the pavement
         (``params.marking_min_pavement_widths``, ``marking_max_pavement_widths`` by default).
