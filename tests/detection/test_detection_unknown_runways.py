@@ -192,7 +192,15 @@ def test_a_threshold_is_not_placed_where_the_rubber_of_the_touchdown_zone_begins
     band is the strip that differs from the ground, and its near end, 150 m past the threshold,
     was taken for the threshold (12-33 px off, confidence 0.7-0.9). The threshold stripes lie
     nearer than that step (:func:`threshold_marking.paint_before`): the threshold is withheld,
-    the edges kept."""
+    the edges kept.
+
+    At 400 m the rubber's start is also a step down from a brighter side with a brighter line
+    past it (the aiming point's marks 7 widths in), and since c541c09 that reading
+    (:func:`threshold_marking._ground_blur_lines`: a blast pad beside snow) withholds the
+    threshold first, with or without ``paint_before``: the outcome is the same, and the ray-cast
+    approach of this runway (``benchmarks/raycast_approach.py --runway 1200,23 --runway-grey 112
+    --rubber 150,700,0.8,70 --fps 5 --start-m 2500``) is identical frame by frame. At 700 m only
+    ``paint_before`` withholds it."""
     camera = CameraModel.default(1024)
     runway = Runway(length_m=1200.0, width_m=23.0)
     scene = PaintedAirport(seed=3, runway_length_m=1200.0, runway_width_m=23.0, runway_grey=112.0,
@@ -200,13 +208,17 @@ def test_a_threshold_is_not_placed_where_the_rubber_of_the_touchdown_zone_begins
     image, state, labels = airport_frame("thesis-1", distance_m, camera, scene, runway=runway)
     roll, pitch = float(state.roll_rad[0]), float(state.pitch_rad[0])
     result = detect_runway(image, camera, roll, pitch)
-    assert result.found and "runway paint" in result.reason, result.reason
     near, edge = _errors(result, camera, labels)
-    assert edge < 1.0
+    assert result.found and edge < 1.0, result.reason
     assert not result.corners_found[:2].any(), (near, result.reason)
-    # the rule off: the rubber's start is reported as the threshold, pixels off
     blind = detect_runway(image, camera, roll, pitch, params=DetectorParams(paint_before_widths=0.0))
-    assert blind.corners_found[:2].all() and _errors(blind, camera, labels)[0].min() > 5.0
+    if distance_m > 500.0:
+        assert "runway paint" in result.reason, result.reason
+        # the rule off: the rubber's start is reported as the threshold, pixels off
+        assert blind.corners_found[:2].all() and _errors(blind, camera, labels)[0].min() > 5.0
+    else:
+        assert "plain pavement, then a marking" in result.reason, result.reason
+        assert not blind.corners_found[:2].any(), blind.reason
 
 
 def _rubber_airport(runway_grey: float, rubber_grey: float):
