@@ -249,16 +249,16 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     maps = (np.where(inside, grid[..., 0], -1).astype(np.float32), np.where(inside, grid[..., 1], -1).astype(np.float32))
     values = remap_inside(image, maps[0], maps[1], inside, cv2.BORDER_CONSTANT, np.nan)
     values = np.where(inside & rows_ok[:, None], values, np.nan)
-    if pavement_step < 0.0 and not unresolved:
-        # a ground brighter than the pavement blurs into its first lines: those that only decay
-        # from it are no marking (a band of them was taken for a bar at the pavement's start)
-        skip = _ground_blur_lines(row_mean(values), min_step)
+    level = row_mean(values)                    # across the width, per line (values: NaN outside)
+    # a ground brighter than the pavement blurs into its first lines: those that only decay from
+    # it are no marking (a band of them was taken for a bar at the pavement's start)
+    skip = _ground_blur_lines(level, min_step) if pavement_step < 0.0 and not unresolved else 0
+    if skip:
         rows_ok[:skip] = False
         values[:skip] = np.nan
+        level[:skip] = np.nan
         if rows_ok.sum() < 8:
             return None
-    else:
-        skip = 0
     ok = values[rows_ok]
     if math.isfinite(surface_level):
         surface = surface_level
@@ -271,9 +271,8 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     sampled = ok[~np.isnan(ok)]
     bright = float(percentile_of(sampled, params.marking_bright_percentile)) if sampled.size else math.nan
     contrast = bright - surface
-    level = row_mean(values)                    # across the width, per line (values: NaN outside)
     doubtful = None
-    d_first_rise = -math.inf                    # unresolved: depth of the first line brighter than the pavement
+    d_first_rise = -math.inf                    # unresolved or past a brighter ground's blur: the first marking's depth
     if unresolved:
         # the stripes of a threshold at the pavement's start lie within its first 0.8 widths (plus
         # the blur): a brighter line there, and the threshold is where the pavement begins
@@ -285,9 +284,7 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         # blur, is the first marking inside it: a band the test below finds farther in is not the
         # threshold's (a blast pad's stripes, blended below the band test at 3.3 km, 1024 px,
         # and the aiming-point marks 10 px in taken for them)
-        rising = rows_ok & (depths <= d_pavement - ONE_LINE_PX) & (level - plain >= min_step)
-        if rising.any():
-            d_first_rise = float(depths[np.nonzero(rising)[0][0]])
+        d_first_rise = _first_rise(level, rows_ok, depths, d_pavement - ONE_LINE_PX, plain, min_step)
         # plain pavement first (no marking for several pixels: paved ground before the threshold)
         # then a brighter line further in: a marking the frame cannot place, so the threshold is
         # doubtful (at 3680 m on 1024 px a displaced threshold's bar 6.7 widths in is a 0.3 px
@@ -314,16 +311,14 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
     if skip:
         # past the blur, the first line brighter than the pavement by the frame's least step is the
         # first marking inside it, as when unresolved (above): a band farther in is another mark
-        plain = float(np.nanmedian(level[rows_ok]))
-        rising = rows_ok & (depths <= depths[skip] - ONE_LINE_PX) & (level - plain >= min_step)
-        if rising.any():
-            d_first_rise = float(depths[np.nonzero(rising)[0][0]])
-            if d_first_rise < d_start_reach:
-                # past where a threshold at the pavement's start shows its stripes: paved ground
-                # before a marking (a blast pad's 127 m of asphalt beside snow, 2048 px at 2.3 km:
-                # the threshold placed where it begins, 8-9 px short, from 2.6 to 1.3 km)
-                doubtful = doubtful or ThresholdMarking(line=None, kind="unresolved", pavement_widths=float(
-                    widths_along(fx, d_pavement, d_first_rise, width_k)))
+        d_first_rise = _first_rise(level, rows_ok, depths, depths[skip] - ONE_LINE_PX,
+                                   float(np.nanmedian(level[rows_ok])), min_step)
+        if -math.inf < d_first_rise < d_start_reach:
+            # past where a threshold at the pavement's start shows its stripes: paved ground
+            # before a marking (a blast pad's 127 m of asphalt beside snow, 2048 px at 2.3 km:
+            # the threshold placed where it begins, 8-9 px short, from 2.6 to 1.3 km)
+            doubtful = doubtful or ThresholdMarking(line=None, kind="unresolved", pavement_widths=float(
+                widths_along(fx, d_pavement, d_first_rise, width_k)))
     if not contrast >= max(2.0 * min_step, abs(pavement_step)):
         return doubtful
     marked = np.nan_to_num((values - surface) * sign, nan=-1.0) > 0.5 * contrast
@@ -479,6 +474,15 @@ STRIPES_INSIDE_WIDTHS = (0.3, 0.5)
 #: Correlation across the runway's columns between the band before the stripes and the stripes
 #: at least this high: the band holds the same stripes.
 STRIPES_ALIKE = 0.7
+
+
+def _first_rise(level: np.ndarray, rows_ok: np.ndarray, depths: np.ndarray, d_from: float, plain: float,
+                min_step: float) -> float:
+    """Depth of the first line read (``rows_ok``), at ``d_from`` or farther in, whose mean
+    ``level`` stands ``min_step`` over the pavement's ``plain`` level: the first marking inside
+    the pavement; -inf when there is none."""
+    rising = rows_ok & (depths <= d_from) & (level - plain >= min_step)
+    return float(depths[np.argmax(rising)]) if rising.any() else -math.inf
 
 
 def _ground_blur_lines(level: np.ndarray, min_step: float) -> int:

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from tests.helpers.detection_frames import colour_frame, edge_error_px, frame
+from tests.helpers.profiles import area_sampled_steps
 from visland.contracts import MEASUREMENT_COLUMNS, read_measurements, write_csv
 from visland.detection import DetectorParams, detect_runway
 
@@ -224,21 +225,6 @@ def test_a_stripe_seen_on_the_near_part_of_an_edge_only():
     assert not _seen_near_only(spread, width, median, params)
 
 
-def _area_sampled_staircase(offsets: np.ndarray, levels, steps_px, blur_px: float) -> np.ndarray:
-    """Grey levels at ``offsets`` across steps at ``steps_px`` between ``levels`` (one more level
-    than steps), each pixel the mean over its width, then a Gaussian blur of ``blur_px`` (by a
-    fine sum): an independent model of a rendered edge."""
-    fine = np.linspace(-12.0, 12.0, 4801)
-    truth = np.full(fine.shape, float(levels[0]))
-    for at, level in zip(steps_px, levels[1:]):
-        truth[fine >= at] = level
-    kernel_x = np.arange(-4.0 * blur_px, 4.0 * blur_px + 1e-9, fine[1] - fine[0])
-    kernel = np.exp(-0.5 * (kernel_x / blur_px) ** 2)
-    blurred = np.convolve(truth, kernel / kernel.sum(), mode="same")
-    box = np.abs(fine[:, None] - offsets[None, :]) <= 0.5                 # a pixel's area around each sample
-    return (blurred[:, None] * box).sum(axis=0) / box.sum(axis=0)
-
-
 @pytest.mark.parametrize("stripe_px", [2.5, 3.0, 4.0, 5.0])
 def test_a_stripe_blurred_into_the_step_onto_it_is_seen_as_a_shoulder(stripe_px):
     """:func:`detector._stripe_shoulder`: asphalt (72), a side stripe ``stripe_px`` wide (196),
@@ -259,11 +245,11 @@ def test_a_stripe_blurred_into_the_step_onto_it_is_seen_as_a_shoulder(stripe_px)
                                 params)[0]
 
     for blur in (0.4, 0.6, 0.9):
-        found = shoulder(_area_sampled_staircase(offsets, (72.0, 196.0, 232.0), (0.0, stripe_px), blur))
+        found = shoulder(area_sampled_steps(offsets, (72.0, 196.0, 232.0), (0.0, stripe_px), blur))
         assert abs(found - stripe_px) < 0.35, (blur, found)
     for blur in (0.3, 0.6, 0.9, 1.2):
         for phase in (0.0, 0.125, 0.25, 0.375):
-            assert np.isnan(shoulder(_area_sampled_staircase(offsets, (72.0, 232.0), (phase,), blur))), (blur, phase)
+            assert np.isnan(shoulder(area_sampled_steps(offsets, (72.0, 232.0), (phase,), blur))), (blur, phase)
 
 
 def test_row_nanmedian_is_numpys_to_the_last_bit():

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from tests.helpers.profiles import area_sampled_steps
 from tests.helpers.study_frames import study_errors, study_frames
 
 
@@ -83,32 +84,22 @@ def test_the_next_search_window_covers_the_doubtful_corners():
     assert roi_doubtful == roi_reported
 
 
-def _blurred_steps(levels, sigma_px: float, lines_px: np.ndarray) -> np.ndarray:
-    """An independent model of a transverse profile: piecewise-constant ``levels``
-    (``[(from_px, level)]``, each from the given depth inwards) blurred by a Gaussian of
-    ``sigma_px``, read at ``lines_px`` pixels inward of where the pavement begins."""
-    bounds = [p for p, _ in levels[1:]] + [math.inf]
-    cdf = np.vectorize(lambda x: 0.5 * (1.0 + math.erf(x / (math.sqrt(2.0) * sigma_px))) if math.isfinite(x)
-                       else (1.0 if x > 0 else 0.0))
-    return sum(level * (cdf(lines_px - p0) - cdf(lines_px - p1)) for (p0, level), p1 in zip(levels, bounds))
-
-
 @pytest.mark.parametrize("sigma_px", [0.8, 1.0, 1.2])
 def test_a_brighter_grounds_blur_is_told_from_the_stripes_at_the_pavements_start(sigma_px):
-    """:func:`threshold_marking._ground_blur_lines` on profiles of its own model, read every half
-    pixel from 0.5 px in: snow 60 levels over the asphalt, blurred 0.5-1.2 px, then 30 px of
-    plain pavement with a band of stripes 9 px in (a blast pad): its first lines only decay, two
-    or more are skipped and none of the band. The same ground with a threshold's stripes (35
-    levels over the asphalt, from 0.3 to 2.3 px in) at the start: paint holds, nothing skipped.
-    (Under a blur of about 0.7 px the ground leaves one line over ``min_step``; one line is not
-    skipped, and is read as before.)"""
+    """:func:`threshold_marking._ground_blur_lines` on profiles of an independent model
+    (:func:`tests.helpers.profiles.area_sampled_steps`), read every half pixel from 0.5 px in:
+    snow 60 levels over the asphalt, blurred 0.8-1.2 px, then 30 px of plain pavement with a
+    band of stripes 9 px in (a blast pad): its first lines only decay, two or more are skipped
+    and none of the band. The same ground with a threshold's stripes (35 levels over the
+    asphalt, from 0.3 to 2.3 px in) at the start: paint holds, nothing skipped. (Under a sharper
+    blur the ground leaves one line over ``min_step``; one line is not skipped, and is read as
+    before.)"""
     from visland.detection.threshold_marking import _ground_blur_lines
     lines = 0.5 + 0.5 * np.arange(60)
-    pad = _blurred_steps([(-math.inf, 60.0), (0.0, 0.0), (9.0, 14.0), (11.0, 0.0)], sigma_px, lines)
+    pad = area_sampled_steps(lines, (60.0, 0.0, 14.0, 0.0), (0.0, 9.0, 11.0), sigma_px)
     skipped = _ground_blur_lines(pad, 6.0)
     assert 2 <= skipped and lines[skipped] < 9.0 - 2.0 * sigma_px, (skipped, np.round(pad[:8], 1))
-    runway = _blurred_steps([(-math.inf, 60.0), (0.0, 0.0), (0.3, 35.0), (2.3, 0.0), (9.0, 14.0), (11.0, 0.0)],
-                            sigma_px, lines)
+    runway = area_sampled_steps(lines, (60.0, 0.0, 35.0, 0.0, 14.0, 0.0), (0.0, 0.3, 2.3, 9.0, 11.0), sigma_px)
     assert _ground_blur_lines(runway, 6.0) == 0, np.round(runway[:8], 1)
 
 
