@@ -151,8 +151,9 @@ class DetectionSequence:
         self.markings_seen: list[tuple[float, float]] = []        # (t_s, widths): markings inside the pavement
         self.confirmed = False                                    # the strip followed is the runway approached
         self.marked = False                                       # ... shown by a marking in its track
-        self.replacement: tuple | None = None                     # (t_s, k_centre) a marked strip found afresh
+        self.replacement: tuple | None = None                     # (t_s, k_centre, marked) a strip found afresh
         self.track_frames = 0                                     # frames found in the track followed
+        self.t_place_check_s: float | None = None                 # last search afresh of a track confirmed by place
 
     def reset(self) -> None:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
@@ -172,6 +173,7 @@ class DetectionSequence:
         self.marked = False
         self.replacement = None
         self.track_frames = 0
+        self.t_place_check_s = None
 
     def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float,
                  predicted: DetectionResult | None = None) -> DetectionResult:
@@ -203,8 +205,13 @@ class DetectionSequence:
         # a new track that matches a strip seen before, not a single frame's: found where the
         # prediction put it (an estimator's, which follows the runway), ...
         seen_before = window is not None and window is predicted and result.found and result.mode == "tracking"
-        if prior is not None and not self.confirmed and inertial:
-            result, prior = self._look_for_confirmed(result, prior, image, roll_rad, pitch_rad, dt, float(t_s))
+        # a strip confirmed by its place alone (measured: a strip whose place is not is not held
+        # back either) is checked against the whole frame now and then
+        recheck = (self.confirmed and not self.marked and self.good_geometry is not None and
+                   (self.t_place_check_s is None or float(t_s) - self.t_place_check_s >= self.params.place_recheck_s))
+        if prior is not None and (not self.confirmed or recheck) and inertial:
+            result, prior = self._look_for_confirmed(result, prior, image, roll_rad, pitch_rad, dt, float(t_s),
+                                                     place_only=self.confirmed)
             seen_before = seen_before or prior is None          # ... replacing the track, found the frame before too
         if result.found:
             result = self._check_moves_with_scene(result, float(t_s), inertial)
@@ -247,6 +254,10 @@ class DetectionSequence:
             # followed (the next frame's prior) but not reported: a taxiway beside a runway
             # lost in fog passes every other test
             return _not_found_as(result, f"not reported: {_unconfirmed_reason(result, self.camera, self.params)}")
+        if result.found and not self.marked and self._contested(float(t_s)):
+            # confirmed by its place alone while another strip showed a threshold marking: the
+            # aircraft can be over a taxiway beside the runway
+            return _not_found_as(result, f"not reported: {self._contested_reason(result, float(t_s))}")
         if result.found and self.track_frames < self.params.new_track_frames:
             # followed but not reported yet: a strip found in one frame can be a road or a taxiway
             # (module docstring)
@@ -258,7 +269,8 @@ class DetectionSequence:
         return result
 
     def _look_for_confirmed(self, result: DetectionResult, prior: DetectionResult, image, roll_rad: float,
-                            pitch_rad: float, dt: float, t_s: float) -> tuple[DetectionResult, DetectionResult | None]:
+                            pitch_rad: float, dt: float, t_s: float,
+                            place_only: bool = False) -> tuple[DetectionResult, DetectionResult | None]:
         """While the strip followed is not confirmed as the runway (:func:`_confirmed`), the whole
         frame is searched afresh each frame: another strip found there with a threshold marking
         (:attr:`~visland.detection.result.DetectionResult.shows_runway_marking`) in this frame and
@@ -274,13 +286,26 @@ class DetectionSequence:
         2.4 km was followed, not reported, while single frames found the runway from 1.2 km. A
         strip confirmed by its place alone does not replace the track: on 'concrete, sand, mono'
         the aircraft starts over the parallel taxiway (185 m beside the runway, thesis-3 205 m
-        out), which the fresh search found, nearer than a height, and took for the runway."""
-        if result.found and _confirmed(result, self.camera, self.params):
+        out), which the fresh search found, nearer than a height, and took for the runway.
+
+        ``place_only``: the strip followed is confirmed by its place alone (``place_recheck_s``).
+        The search afresh is made whatever this frame's place says, and only a strip found there
+        with a threshold marking counts: it contests the one followed (:meth:`_contested`) and,
+        found again within ``hold_s``, replaces it. A search that finds nothing marked leaves the
+        contest standing until ``hold_s`` has passed since the marked strip was seen (single
+        frames miss a runway's worn stripes at 3 km)."""
+        if not place_only and result.found and _confirmed(result, self.camera, self.params):
             return result, prior
+        self.t_place_check_s = t_s if place_only else None
         fresh = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params)
-        candidate, self.replacement = self.replacement, None
+        candidate = self.replacement
+        if candidate is not None and t_s - candidate[0] > self.params.hold_s:
+            candidate = None
+        if not place_only:
+            self.replacement = None
         weak = not result.found or result.confidence < self.params.place_min_confidence
-        convincing = (weak and fresh.found and fresh.confidence >= self.params.replacement_min_confidence
+        convincing = (not place_only and weak and fresh.found
+                      and fresh.confidence >= self.params.replacement_min_confidence
                       and _confirmed(fresh, self.camera, self.params))
         if not (fresh.found and (fresh.shows_runway_marking or convincing)):
             return result, prior
@@ -298,8 +323,23 @@ class DetectionSequence:
             self.reset()
             return fresh, None
         if geometry is not None:
-            self.replacement = (t_s, geometry[0])
+            self.replacement = (t_s, geometry[0], fresh.shows_runway_marking)
         return result, prior
+
+    def _contested(self, t_s: float) -> bool:
+        """Whether another strip, found afresh with a threshold marking within ``hold_s``, contests
+        the one followed (:meth:`_look_for_confirmed`)."""
+        return (self.replacement is not None and self.replacement[2]
+                and t_s - self.replacement[0] <= self.params.hold_s)
+
+    def _contested_reason(self, result: DetectionResult, t_s: float) -> str:
+        """Why a strip confirmed by its place alone is not reported while contested (one sentence)."""
+        t_seen, k_seen, _ = self.replacement
+        heights, _ = _lateral_offset(result, self.camera) or (math.nan, math.nan)
+        return (f"the strip followed lies {heights:.2f} camera heights beside the aircraft and has shown no threshold "
+                f"marking, while a search of the whole frame {t_s - t_seen:.1f} s ago found another strip with one, "
+                f"its centre line at lateral offset / height {k_seen:+.2f}: which is the runway approached is not "
+                "known yet (a taxiway under the aircraft?)")
 
     def _check_moves_with_scene(self, result: DetectionResult, t_s: float, inertial: bool) -> DetectionResult:
         """Refuse a "runway" that stays put in the image while the horizon moves (:class:`DetectorParams`

@@ -320,12 +320,18 @@ def _turning_sequence_outcomes(monkeypatch, distance_m, step_deg, fixed_to_camer
     camera = CameraModel.from_fov(640, 360, 60.0, (0.0, -4.0, 0.0))
     states = simulate_flight(get_scenario("thesis-3"))
     i = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - distance_m)))
-    results = iter([_camera_turned_result(camera, states, i, step_deg * k, fixed_to_camera, vp_below_px)
-                    for k in range(4)])
-    monkeypatch.setattr(sequence_module, "detect_runway", lambda *args, **kwargs: next(results))
+    results = [_camera_turned_result(camera, states, i, step_deg * k, fixed_to_camera, vp_below_px)
+               for k in range(4)]
+    frame = [0]
+    # every search of a frame, tracking or afresh, finds that frame's result
+    monkeypatch.setattr(sequence_module, "detect_runway", lambda *args, **kwargs: results[frame[0]])
     sequence = sequence_module.DetectionSequence(camera, ONE_FRAME)
     assert vp_below_px == 0.0 or vp_below_px > sequence.params.static_min_horizon_motion_px
-    return [sequence(None, 0.0, 0.0, 0.5 * k) for k in range(4)]
+    outcomes = []
+    for k in range(4):
+        frame[0] = k
+        outcomes.append(sequence(None, 0.0, 0.0, 0.5 * k))
+    return outcomes
 
 
 def _assert_refused_from_the_second(outcomes, refused: bool):
@@ -579,6 +585,62 @@ def test_a_strip_confirmed_by_its_place_alone_does_not_replace_the_one_followed(
     results, priors = _replay(monkeypatch, states, camera, frames, runway, runway[:1] + taxiway[1:])
     assert not any(r.found for r in results), [r.reason for r in results]
     assert all(prior is runway[k - 1] for k, prior in priors)                     # the runway followed
+
+
+@pytest.mark.parametrize("sightings", [2, 1])
+def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_by_its_place(monkeypatch, sightings):
+    """thesis-3 starts 205 m right of the runway, over a parallel taxiway 185 m out (held-out
+    draw 14: the taxiway, acquired first, was confirmed by its place and reported from 3.6 to
+    2.7 km, 104-127 px off). Followed and confirmed by its place alone, the strip is checked
+    against a search of the whole frame every ``place_recheck_s`` (0.5 s: every third frame at 5
+    Hz, frames 1, 4, 7, ...; none once a marked strip is followed). The runway, marked, found by that search from frame 8 on: the
+    check of frame 10 finds it, the taxiway is no longer reported ("which is the runway
+    approached is not known yet"), and the check of frame 13 finds it again within ``hold_s``:
+    the runway replaces the taxiway, reported at once. Found by one check only, the contest
+    lasts ``hold_s`` and the taxiway, still confirmed by its place, is reported again after."""
+    states, camera, frames, taxiway = _beside_runway_frames(185.0, False, start_m=3600.0)
+    _, _, _, runway = _beside_runway_frames(0.0, True, start_m=3600.0)
+    lateral = np.abs(states.p_runway_m[frames, 1] - 185.0) / -states.p_runway_m[frames, 2]
+    assert lateral.max() < 0.5, lateral                                  # the taxiway under the aircraft
+    switch, contested, replaced = 8, 10, 13
+    if sightings == 2:
+        acquired = taxiway[:switch] + runway[switch:]
+    else:
+        acquired = taxiway[:contested] + runway[contested:contested + 1] + taxiway[contested + 1:]
+    searched = []
+
+    def counted(k):
+        searched.append(k)
+        return acquired[k]
+    tracked = taxiway[:replaced + 1] + runway[replaced + 1:] if sightings == 2 else taxiway
+    results, priors = _replay(monkeypatch, states, camera, frames, tracked, _Lazy(counted, len(frames)))
+    # every 0.6 s, not every frame; none once the runway, marked, is followed
+    assert searched == [0] + list(range(1, replaced + 1 if sightings == 2 else len(frames), 3))
+    found = [r.found for r in results]
+    assert found[:contested] == [False] + [True] * (contested - 1), [r.reason for r in results]
+    assert found[contested:replaced] == [False] * (replaced - contested)
+    assert "which is the runway approached is not known yet" in results[contested].reason, results[contested].reason
+    if sightings == 2:
+        assert results[replaced] is runway[replaced]
+        assert all(found[replaced:])
+        assert all(prior is runway[k - 1] for k, prior in priors if k > replaced + 1)
+    else:
+        assert not any(found[contested:contested + 5])                    # hold_s after the sighting
+        assert all(found[contested + 6:])                                 # the taxiway again
+        assert all(prior is taxiway[k - 1] for k, prior in priors)
+
+
+class _Lazy:
+    """A list whose item ``k`` is ``function(k)``, computed when read (counts the searches)."""
+
+    def __init__(self, function, n):
+        self.function, self.n = function, n
+
+    def __getitem__(self, k):
+        return self.function(k)
+
+    def __len__(self):
+        return self.n
 
 
 @pytest.mark.parametrize("confidence, reported", [(0.4, False), (0.9, True)])
