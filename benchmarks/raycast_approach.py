@@ -58,7 +58,8 @@ def scene_of(args):
         joining.append((x, int(side), angle, 260.0))
     return PaintedAirport(runway_length_m=args.runway[0], runway_width_m=args.runway[1], seed=args.seed,
                           joining_taxiways=tuple(joining), haze_range_m=args.haze_m, taxiway_grey=args.taxiway_grey,
-                          taxiway_offset_m=-(4 * args.runway[1] + 2.5), grass_grey=args.ground_grey,
+                          taxiway_offset_m=(-(4 * args.runway[1] + 2.5) if args.taxiway_offset is None
+                                            else args.taxiway_offset), grass_grey=args.ground_grey,
                           runway_grey=args.runway_grey, marking_grey=args.marking_grey,
                           rubber=args.rubber)
 
@@ -103,6 +104,9 @@ def main(argv=None) -> int:
                              "300 m right at 90 deg and 450 m left at 35 deg)")
     parser.add_argument("--taxiway-grey", type=float, default=84.0,
                         help="grey level of the joining taxiways (default 84: asphalt like the runway's 78)")
+    parser.add_argument("--taxiway-offset", type=float, default=None, metavar="Y_M",
+                        help="centre of the parallel taxiway, metres right of the runway's centre line (default: "
+                             "4 runway widths + 2.5 m to the left; thesis-3 starts 205 m right)")
     parser.add_argument("--haze-m", type=float, default=6000.0, help="haze range of the ray caster (m)")
     parser.add_argument("--ground-grey", type=float, default=105.0,
                         help="grey level of the ground around the runway (default 105, grass; 232: snow)")

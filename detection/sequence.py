@@ -67,6 +67,12 @@ first frames of an approach that starts more than a height off the runway's cent
 enough that its threshold stripes are not seen (an unmarked runway until the aircraft is within
 a height: thesis-3's first 4 s).
 
+An approach that starts over a parallel taxiway confirms the taxiway by its place (held-out
+draw 14). A strip confirmed by its place alone is therefore checked against a search of the
+whole frame every ``place_recheck_s``: another strip found there with a threshold marking makes
+it doubtful (not reported: "which is the runway approached is not known yet") and, found again
+within ``hold_s``, replaces it.
+
 A new track (no good detection within ``hold_s``) is followed from its first frame but reported
 from its ``new_track_frames``-th (2): a strip found in one frame only can be a road or a taxiway
 that the next frame refuses, and then it was a confident wrong answer. On the independent
@@ -336,8 +342,9 @@ class DetectionSequence:
         """Why a strip confirmed by its place alone is not reported while contested (one sentence)."""
         t_seen, k_seen, _ = self.replacement
         heights, _ = _lateral_offset(result, self.camera) or (math.nan, math.nan)
+        when = "in this frame" if t_s - t_seen < 1e-6 else f"{t_s - t_seen:.1f} s ago"
         return (f"the strip followed lies {heights:.2f} camera heights beside the aircraft and has shown no threshold "
-                f"marking, while a search of the whole frame {t_s - t_seen:.1f} s ago found another strip with one, "
+                f"marking, while a search of the whole frame {when} found another strip with one, "
                 f"its centre line at lateral offset / height {k_seen:+.2f}: which is the runway approached is not "
                 "known yet (a taxiway under the aircraft?)")
 
