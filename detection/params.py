@@ -601,17 +601,18 @@ class DetectorParams(ParamsFile):
         lost in the frame), an unmarked strip found afresh with at least this confidence, itself
         confirmed by its place, in this frame and the one before, replaces it
         (:meth:`~visland.detection.sequence.DetectionSequence._look_for_confirmed`).
-    place_recheck_s : float
+    place_recheck_s, place_recheck_max_s : float
         A strip confirmed by its place alone (within ``unconfirmed_max_lateral_heights``, no
         threshold marking seen in its track) is checked against a search of the whole frame
-        afresh at most every this many seconds: another strip found there with a threshold
-        marking makes the one followed doubtful (not reported) and, seen again within
-        ``hold_s``, replaces it. An approach that starts over a parallel taxiway finds the
+        afresh: at its first frame so confirmed, then ``place_recheck_s`` later, the interval
+        doubled after each search that found no other marked strip, up to
+        ``place_recheck_max_s``. Another strip found there with a threshold marking makes the one
+        followed doubtful (not reported), is looked for in every frame while it does, and, seen
+        again within ``hold_s``, replaces the one followed. An approach that starts over a parallel taxiway finds the
         taxiway under the aircraft confirmed by its place (held-out draw 14: from 3.6 to 2.7 km,
         edges 104-127 px off, while single frames searched afresh found the runway beside it, its
-        stripes read). Every ``place_recheck_s`` rather than every frame: a search of the whole
-        frame costs about eight tracked frames, and a runway without markings is confirmed by
-        its place alone all the way down.
+        stripes read). Not every frame: a search of the whole frame costs about eight tracked
+        frames, and a runway without markings is confirmed by its place alone all the way down.
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
@@ -1115,6 +1116,7 @@ class DetectorParams(ParamsFile):
     place_min_confidence: float = 0.6
     replacement_min_confidence: float = 0.8
     place_recheck_s: float = 0.5
+    place_recheck_max_s: float = 4.0
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     corner_min_confidence: float = 0.4
@@ -1315,7 +1317,7 @@ class DetectorParams(ParamsFile):
         "low_contrast_hough_bands": (0.0, 1.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
-        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "weak_max_lateral_heights": (0.0, 1e6), "place_min_confidence": (0.0, 1.0), "replacement_min_confidence": (0.0, 1.0), "place_recheck_s": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "weak_max_lateral_heights": (0.0, 1e6), "place_min_confidence": (0.0, 1.0), "replacement_min_confidence": (0.0, 1.0), "place_recheck_s": (0.0, 1e6), "place_recheck_max_s": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
         "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
         "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
         "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),

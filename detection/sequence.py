@@ -69,7 +69,7 @@ a height: thesis-3's first 4 s).
 
 An approach that starts over a parallel taxiway confirms the taxiway by its place (held-out
 draw 14). A strip confirmed by its place alone is therefore checked against a search of the
-whole frame every ``place_recheck_s``: another strip found there with a threshold marking makes
+whole frame now and then (``place_recheck_s``, ``place_recheck_max_s``): another strip found there with a threshold marking makes
 it doubtful (not reported: "which is the runway approached is not known yet") and, found again
 within ``hold_s``, replaces it.
 
@@ -160,6 +160,7 @@ class DetectionSequence:
         self.replacement: tuple | None = None                     # (t_s, k_centre, marked) a strip found afresh
         self.track_frames = 0                                     # frames found in the track followed
         self.t_place_check_s: float | None = None                 # last search afresh of a track confirmed by place
+        self.place_interval_s: float | None = None                # ... and the time to the next one
 
     def reset(self) -> None:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
@@ -180,6 +181,7 @@ class DetectionSequence:
         self.replacement = None
         self.track_frames = 0
         self.t_place_check_s = None
+        self.place_interval_s = None
 
     def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float,
                  predicted: DetectionResult | None = None) -> DetectionResult:
@@ -213,8 +215,7 @@ class DetectionSequence:
         seen_before = window is not None and window is predicted and result.found and result.mode == "tracking"
         # a strip confirmed by its place alone (measured: a strip whose place is not is not held
         # back either) is checked against the whole frame now and then
-        recheck = (self.confirmed and not self.marked and self.good_geometry is not None and
-                   (self.t_place_check_s is None or float(t_s) - self.t_place_check_s >= self.params.place_recheck_s))
+        recheck = self.confirmed and not self.marked and self.good_geometry is not None and self._recheck_due(float(t_s))
         if prior is not None and (not self.confirmed or recheck) and inertial:
             result, prior = self._look_for_confirmed(result, prior, image, roll_rad, pitch_rad, dt, float(t_s),
                                                      place_only=self.confirmed)
@@ -234,6 +235,7 @@ class DetectionSequence:
             result = self._follow_threshold(result, float(t_s))
         if result.found and prior is None:
             self.marked = False                                   # a new track: confirmed by its own frames
+            self.t_place_check_s = self.place_interval_s = None
         if result.found:
             # a marking seen confirms the track for good; its place alone, only the frame it
             # holds in (a parallel taxiway within a height at 2.4 km is several heights out at
@@ -294,7 +296,7 @@ class DetectionSequence:
         the aircraft starts over the parallel taxiway (185 m beside the runway, thesis-3 205 m
         out), which the fresh search found, nearer than a height, and took for the runway.
 
-        ``place_only``: the strip followed is confirmed by its place alone (``place_recheck_s``).
+        ``place_only``: the strip followed is confirmed by its place alone (:meth:`_recheck_due`).
         The search afresh is made whatever this frame's place says, and only a strip found there
         with a threshold marking counts: it contests the one followed (:meth:`_contested`) and,
         found again within ``hold_s``, replaces it. A search that finds nothing marked leaves the
@@ -303,6 +305,9 @@ class DetectionSequence:
         if not place_only and result.found and _confirmed(result, self.camera, self.params):
             return result, prior
         self.t_place_check_s = t_s if place_only else None
+        if place_only:      # the next check later, unless this one finds a marked strip elsewhere
+            self.place_interval_s = (self.params.place_recheck_s if self.place_interval_s is None else
+                                     min(2.0 * self.place_interval_s, self.params.place_recheck_max_s))
         fresh = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params)
         candidate = self.replacement
         if candidate is not None and t_s - candidate[0] > self.params.hold_s:
@@ -330,7 +335,20 @@ class DetectionSequence:
             return fresh, None
         if geometry is not None:
             self.replacement = (t_s, geometry[0], fresh.shows_runway_marking)
+            if place_only:
+                self.place_interval_s = self.params.place_recheck_s
         return result, prior
+
+    def _recheck_due(self, t_s: float) -> bool:
+        """Whether the strip followed, confirmed by its place alone, is due for a search of the
+        whole frame (:meth:`_look_for_confirmed` with ``place_only``): at its first frame so
+        confirmed, then after ``place_recheck_s``, doubled after each search that found no other
+        strip with a threshold marking up to ``place_recheck_max_s``, and in every frame while such
+        a strip contests it (:meth:`_contested`)."""
+        if self.t_place_check_s is None or self._contested(t_s):
+            return True
+        interval = self.params.place_recheck_s if self.place_interval_s is None else self.place_interval_s
+        return t_s - self.t_place_check_s >= interval - 1e-9
 
     def _contested(self, t_s: float) -> bool:
         """Whether another strip, found afresh with a threshold marking within ``hold_s``, contests

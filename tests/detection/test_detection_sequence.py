@@ -479,8 +479,8 @@ def test_a_strip_more_than_three_heights_to_the_side_is_not_the_runway_being_app
 
 
 def _beside_runway_frames(beside_m: float, marked: bool, scenario_name: str = "thesis-3",
-                          start_m: float = 2400.0, confidence: float = 0.9):
-    """``scenario_name`` from ``start_m`` before the threshold at 5 Hz (20 frames, 2048 px
+                          start_m: float = 2400.0, confidence: float = 0.9, n: int = 20):
+    """``scenario_name`` from ``start_m`` before the threshold at 5 Hz (``n`` frames, 2048 px
     camera): the states, the frames' indices and, per frame, a result on the exact edges of a
     strip ``beside_m`` metres beside the runway, found with ``confidence``."""
     from visland.flight import simulate_flight
@@ -490,7 +490,7 @@ def _beside_runway_frames(beside_m: float, marked: bool, scenario_name: str = "t
     camera = CameraModel.default(2048)
     step = int(round(0.2 / (states.t_s[1] - states.t_s[0])))
     first = int(np.argmin(np.abs(-states.p_runway_m[:, 0] - start_m)))
-    frames = [first + k * step for k in range(20)]
+    frames = [first + k * step for k in range(n)]
     return states, camera, frames, [replace(_runway_result(states, i, scenario.runway, camera, beside_m, marked),
                                             confidence=confidence) for i in frames]
 
@@ -592,17 +592,19 @@ def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_b
     """thesis-3 starts 205 m right of the runway, over a parallel taxiway 185 m out (held-out
     draw 14: the taxiway, acquired first, was confirmed by its place and reported from 3.6 to
     2.7 km, 104-127 px off). Followed and confirmed by its place alone, the strip is checked
-    against a search of the whole frame every ``place_recheck_s`` (0.5 s: every third frame at 5
-    Hz, frames 1, 4, 7, ...; none once a marked strip is followed). The runway, marked, found by that search from frame 8 on: the
-    check of frame 10 finds it, the taxiway is no longer reported ("which is the runway
-    approached is not known yet"), and the check of frame 13 finds it again within ``hold_s``:
-    the runway replaces the taxiway, reported at once. Found by one check only, the contest
-    lasts ``hold_s`` and the taxiway, still confirmed by its place, is reported again after."""
-    states, camera, frames, taxiway = _beside_runway_frames(185.0, False, start_m=3600.0)
-    _, _, _, runway = _beside_runway_frames(0.0, True, start_m=3600.0)
+    against a search of the whole frame at its first frame so confirmed, then ``place_recheck_s``
+    (0.5 s) later, the interval doubled after each search that finds no other marked strip (at
+    5 Hz: frames 1, 4, 9, 19, ...; none once a marked strip is followed). The runway, marked,
+    found by that search from frame 8 on: the check of frame 9 finds it, the taxiway is no
+    longer reported ("which is the runway approached is not known yet"), the runway is looked
+    for in every frame while it contests the taxiway, and found again in frame 10 it replaces
+    the taxiway, reported at once. Found by one check only, the contest lasts ``hold_s`` (every
+    frame searched) and the taxiway, still confirmed by its place, is reported again after."""
+    states, camera, frames, taxiway = _beside_runway_frames(185.0, False, start_m=3600.0, n=30)
+    _, _, _, runway = _beside_runway_frames(0.0, True, start_m=3600.0, n=30)
     lateral = np.abs(states.p_runway_m[frames, 1] - 185.0) / -states.p_runway_m[frames, 2]
     assert lateral.max() < 0.5, lateral                                  # the taxiway under the aircraft
-    switch, contested, replaced = 8, 10, 13
+    switch, contested, replaced = 8, 9, 10
     if sightings == 2:
         acquired = taxiway[:switch] + runway[switch:]
     else:
@@ -614,18 +616,19 @@ def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_b
         return acquired[k]
     tracked = taxiway[:replaced + 1] + runway[replaced + 1:] if sightings == 2 else taxiway
     results, priors = _replay(monkeypatch, states, camera, frames, tracked, _Lazy(counted, len(frames)))
-    # every 0.6 s, not every frame; none once the runway, marked, is followed
-    assert searched == [0] + list(range(1, replaced + 1 if sightings == 2 else len(frames), 3))
     found = [r.found for r in results]
     assert found[:contested] == [False] + [True] * (contested - 1), [r.reason for r in results]
-    assert found[contested:replaced] == [False] * (replaced - contested)
     assert "which is the runway approached is not known yet" in results[contested].reason, results[contested].reason
     if sightings == 2:
+        assert searched == [0, 1, 4, 9, 10]
         assert results[replaced] is runway[replaced]
         assert all(found[replaced:])
         assert all(prior is runway[k - 1] for k, prior in priors if k > replaced + 1)
     else:
-        assert not any(found[contested:contested + 5])                    # hold_s after the sighting
+        # contested while hold_s lasts (frames 9-13, each searched), then checked at 0.5, 1, 2, 4 s
+        assert searched[:4] == [0, 1, 4, 9] and searched[4:9] == list(range(10, 15)), searched
+        assert len(searched) <= 12
+        assert not any(found[contested:contested + 5])
         assert all(found[contested + 6:])                                 # the taxiway again
         assert all(prior is taxiway[k - 1] for k, prior in priors)
 
