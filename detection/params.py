@@ -608,11 +608,12 @@ class DetectorParams(ParamsFile):
         doubled after each search that found no other marked strip, up to
         ``place_recheck_max_s``. Another strip found there with a threshold marking makes the one
         followed doubtful (not reported), is looked for in every frame while it does, and, seen
-        again within ``hold_s``, replaces the one followed. An approach that starts over a parallel taxiway finds the
-        taxiway under the aircraft confirmed by its place (held-out draw 14: from 3.6 to 2.7 km,
-        edges 104-127 px off, while single frames searched afresh found the runway beside it, its
-        stripes read). Not every frame: a search of the whole frame costs about eight tracked
-        frames, and a runway without markings is confirmed by its place alone all the way down.
+        again within ``hold_s``, replaces the one followed. An approach that starts over a
+        parallel taxiway finds the taxiway under the aircraft confirmed by its place (held-out
+        draw 14: from 3.6 to 2.7 km, edges 104-127 px off, while single frames searched afresh
+        found the runway beside it, its stripes read). Not every frame: a search of the whole
+        frame costs about eight tracked frames, and a runway without markings is confirmed by its
+        place alone all the way down.
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).

@@ -69,9 +69,9 @@ a height: thesis-3's first 4 s).
 
 An approach that starts over a parallel taxiway confirms the taxiway by its place (held-out
 draw 14). A strip confirmed by its place alone is therefore checked against a search of the
-whole frame now and then (``place_recheck_s``, ``place_recheck_max_s``): another strip found there with a threshold marking makes
-it doubtful (not reported: "which is the runway approached is not known yet") and, found again
-within ``hold_s``, replaces it.
+whole frame now and then (``place_recheck_s``, backing off to ``place_recheck_max_s``): another
+strip found there with a threshold marking makes it doubtful (not reported: "which is the runway
+approached is not known yet") and, found again within ``hold_s``, replaces it.
 
 A new track (no good detection within ``hold_s``) is followed from its first frame but reported
 from its ``new_track_frames``-th (2): a strip found in one frame only can be a road or a taxiway
@@ -215,7 +215,8 @@ class DetectionSequence:
         seen_before = window is not None and window is predicted and result.found and result.mode == "tracking"
         # a strip confirmed by its place alone (measured: a strip whose place is not is not held
         # back either) is checked against the whole frame now and then
-        recheck = self.confirmed and not self.marked and self.good_geometry is not None and self._recheck_due(float(t_s))
+        recheck = (self.confirmed and not self.marked and self.good_geometry is not None
+                   and self._recheck_due(float(t_s)))
         if prior is not None and (not self.confirmed or recheck) and inertial:
             result, prior = self._look_for_confirmed(result, prior, image, roll_rad, pitch_rad, dt, float(t_s),
                                                      place_only=self.confirmed)
