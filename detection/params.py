@@ -607,8 +607,8 @@ class DetectorParams(ParamsFile):
         afresh: at its first frame so confirmed, then ``place_recheck_s`` later, the interval
         doubled after each search that found no other marked strip, up to
         ``place_recheck_max_s``. Another strip found there with a threshold marking makes the one
-        followed doubtful (not reported), is looked for in every frame while it does, and, seen
-        again within ``hold_s``, replaces the one followed. An approach that starts over a
+        followed doubtful (not reported) for ``hold_s``, is looked for in every frame while it
+        does, and, seen again in the next frame, replaces the one followed. An approach that starts over a
         parallel taxiway finds the taxiway under the aircraft confirmed by its place (held-out
         draw 14: from 3.6 to 2.7 km, edges 104-127 px off, while single frames searched afresh
         found the runway beside it, its stripes read). Not every frame: a search of the whole

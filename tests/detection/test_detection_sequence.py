@@ -587,7 +587,7 @@ def test_a_strip_confirmed_by_its_place_alone_does_not_replace_the_one_followed(
     assert all(prior is runway[k - 1] for k, prior in priors)                     # the runway followed
 
 
-@pytest.mark.parametrize("sightings", [2, 1])
+@pytest.mark.parametrize("sightings", [2, 1, "apart"])
 def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_by_its_place(monkeypatch, sightings):
     """thesis-3 starts 205 m right of the runway, over a parallel taxiway 185 m out (held-out
     draw 14: the taxiway, acquired first, was confirmed by its place and reported from 3.6 to
@@ -599,7 +599,10 @@ def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_b
     longer reported ("which is the runway approached is not known yet"), the runway is looked
     for in every frame while it contests the taxiway, and found again in frame 10 it replaces
     the taxiway, reported at once. Found by one check only, the contest lasts ``hold_s`` (every
-    frame searched) and the taxiway, still confirmed by its place, is reported again after."""
+    frame searched) and the taxiway, still confirmed by its place, is reported again after.
+    Found by the searches of frames 9 and 13 but not of 10-12 ("apart": held-out draw 19, where
+    a strip 1.6 heights out was read as marked in two searches 1 s apart, the runway followed),
+    it never replaces the strip followed: a sighting must be confirmed by the next search."""
     states, camera, frames, taxiway = _beside_runway_frames(185.0, False, start_m=3600.0, n=30)
     _, _, _, runway = _beside_runway_frames(0.0, True, start_m=3600.0, n=30)
     lateral = np.abs(states.p_runway_m[frames, 1] - 185.0) / -states.p_runway_m[frames, 2]
@@ -607,8 +610,10 @@ def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_b
     switch, contested, replaced = 8, 9, 10
     if sightings == 2:
         acquired = taxiway[:switch] + runway[switch:]
-    else:
+    elif sightings == 1:
         acquired = taxiway[:contested] + runway[contested:contested + 1] + taxiway[contested + 1:]
+    else:
+        acquired = [runway[k] if k in (contested, contested + 4) else taxiway[k] for k in range(len(frames))]
     searched = []
 
     def counted(k):
@@ -624,6 +629,10 @@ def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_b
         assert results[replaced] is runway[replaced]
         assert all(found[replaced:])
         assert all(prior is runway[k - 1] for k, prior in priors if k > replaced + 1)
+    elif sightings == "apart":
+        assert not any(found[contested:contested + 9])                    # hold_s after each sighting
+        assert all(found[contested + 10:])                                # the taxiway again
+        assert all(prior is taxiway[k - 1] for k, prior in priors)
     else:
         # contested while hold_s lasts (frames 9-13, each searched), then checked at 0.5, 1, 2, 4 s
         assert searched[:4] == [0, 1, 4, 9] and searched[4:9] == list(range(10, 15)), searched
