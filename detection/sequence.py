@@ -354,8 +354,7 @@ class DetectionSequence:
         a strip contests it (:meth:`_contested`)."""
         if self.t_place_check_s is None or self._contested(t_s):
             return True
-        interval = self.params.place_recheck_s if self.place_interval_s is None else self.place_interval_s
-        return t_s - self.t_place_check_s >= interval - 1e-9
+        return t_s - self.t_place_check_s >= self.place_interval_s - 1e-9   # both set by the last search
 
     def _contested(self, t_s: float) -> bool:
         """Whether another strip, found afresh with a threshold marking within ``hold_s``, contests
