@@ -93,6 +93,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -113,6 +114,15 @@ IMAGE_HORIZON_SIGMA_DEG = 0.15
 #: A runway end is compared with the median width of this many of the last ends reported
 #: (:meth:`DetectionSequence._follow_end`).
 END_TRACK_WIDTHS = 5
+
+
+class _Sighting(NamedTuple):
+    """Another strip found by a search of the whole frame while one is followed
+    (:meth:`DetectionSequence._look_for_confirmed`): when, where (``k_centre = Y / h``), and
+    whether it showed a threshold marking."""
+    t_s: float
+    k_centre: float
+    marked: bool
 
 
 def _not_found_as(result: DetectionResult, reason: str) -> DetectionResult:
@@ -158,7 +168,7 @@ class DetectionSequence:
         self.markings_seen: list[tuple[float, float]] = []        # (t_s, widths): markings inside the pavement
         self.confirmed = False                                    # the strip followed is the runway approached
         self.marked = False                                       # ... shown by a marking in its track
-        self.replacement: tuple | None = None                     # (t_s, k_centre, marked) a strip found afresh
+        self.replacement: _Sighting | None = None                 # another strip found afresh
         self.track_frames = 0                                     # frames found in the track followed
         self.t_place_check_s: float | None = None                 # last search afresh of a track confirmed by place
         self.place_interval_s: float | None = None                # ... and the time to the next one
@@ -315,9 +325,9 @@ class DetectionSequence:
                                      min(2.0 * self.place_interval_s, self.params.place_recheck_max_s))
         fresh = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params)
         candidate = self.replacement
-        if candidate is not None and t_s - candidate[0] > self.params.hold_s:
+        if candidate is not None and t_s - candidate.t_s > self.params.hold_s:
             candidate = None
-        if place_only and candidate is not None and candidate[0] != previous_check_s:
+        if place_only and candidate is not None and candidate.t_s != previous_check_s:
             candidate = None    # found by a search before the last one: not in two searches running
         if not place_only:
             self.replacement = None
@@ -335,13 +345,13 @@ class DetectionSequence:
         # another strip, marked or convincing: it replaces the one followed when the frame
         # before found it too (one frame's marking can be a texture's end read as paint)
         geometry = _ground_geometry(fresh, self.camera)
-        if (candidate is not None and geometry is not None and t_s - candidate[0] <= self.params.hold_s
-                and not _identity_mismatch(fresh, self.camera, candidate[1], math.nan, t_s - candidate[0],
+        if (candidate is not None and geometry is not None
+                and not _identity_mismatch(fresh, self.camera, candidate.k_centre, math.nan, t_s - candidate.t_s,
                                            self.params)):
             self.reset()
             return fresh, None
         if geometry is not None:
-            self.replacement = (t_s, geometry[0], fresh.shows_runway_marking)
+            self.replacement = _Sighting(t_s, geometry[0], fresh.shows_runway_marking)
             if place_only:
                 self.place_interval_s = self.params.place_recheck_s
         return result, prior
@@ -359,8 +369,8 @@ class DetectionSequence:
     def _contested(self, t_s: float) -> bool:
         """Whether another strip, found afresh with a threshold marking within ``hold_s``, contests
         the one followed (:meth:`_look_for_confirmed`)."""
-        return (self.replacement is not None and self.replacement[2]
-                and t_s - self.replacement[0] <= self.params.hold_s)
+        return (self.replacement is not None and self.replacement.marked
+                and t_s - self.replacement.t_s <= self.params.hold_s)
 
     def _contested_reason(self, result: DetectionResult, t_s: float) -> str:
         """Why a strip confirmed by its place alone is not reported while contested (one sentence)."""
