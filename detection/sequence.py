@@ -74,6 +74,11 @@ strip found there with a threshold marking makes it doubtful (not reported: "whi
 approached is not known yet") and, found again by the next search (every frame's while it
 contests), replaces it.
 
+A threshold marking read once on a doubtful strip farther than
+``single_marking_max_lateral_heights`` (1.5) beside the aircraft confirms it only when read
+again within ``weak_marking_window_s``: on held-out draw 4 (a concrete runway lost on sand at
+dusk) the sand's blur at a taxiway's start, 2.04 heights out, was read as paint in one frame.
+
 A new track (no good detection within ``hold_s``) is followed from its first frame but reported
 from its ``new_track_frames``-th (2): a strip found in one frame only can be a road or a taxiway
 that the next frame refuses, and then it was a confident wrong answer. On the independent
@@ -172,6 +177,7 @@ class DetectionSequence:
         self.track_frames = 0                                     # frames found in the track followed
         self.t_place_check_s: float | None = None                 # last search afresh of a track confirmed by place
         self.place_interval_s: float | None = None                # ... and the time to the next one
+        self.marking_reads: list[float] = []                      # t_s: markings read on a doubtful strip far out
 
     def reset(self) -> None:
         """Forget the last good detection and the threshold's track (the next frame is searched afresh)."""
@@ -193,6 +199,7 @@ class DetectionSequence:
         self.track_frames = 0
         self.t_place_check_s = None
         self.place_interval_s = None
+        self.marking_reads = []
 
     def __call__(self, image, roll_rad: float | None, pitch_rad: float | None, t_s: float,
                  predicted: DetectionResult | None = None) -> DetectionResult:
@@ -248,12 +255,13 @@ class DetectionSequence:
         if result.found and prior is None:
             self.marked = False                                   # a new track: confirmed by its own frames
             self.t_place_check_s = self.place_interval_s = None
+            self.marking_reads = []
         if result.found:
-            # a marking seen confirms the track for good; its place alone, only the frame it
-            # holds in (a parallel taxiway within a height at 2.4 km is several heights out at
-            # 1 km)
-            self.marked = self.marked or result.shows_runway_marking
-            self.confirmed = self.marked or _confirmed(result, self.camera, self.params)
+            # a marking seen confirms the track for good (on a doubtful strip far beside the
+            # approach, read in two frames); its place alone, only the frame it holds in (a
+            # parallel taxiway within a height at 2.4 km is several heights out at 1 km)
+            self.marked = self.marked or (result.shows_runway_marking and self._marking_confirms(result, float(t_s)))
+            self.confirmed = self.marked or _confirmed_by_place(result, self.camera, self.params)
         if result.found:
             self.track_frames = 1 if prior is None else self.track_frames + 1
             if seen_before:
@@ -273,7 +281,8 @@ class DetectionSequence:
         if result.found and not self.confirmed:
             # followed (the next frame's prior) but not reported: a taxiway beside a runway
             # lost in fog passes every other test
-            return _not_found_as(result, f"not reported: {_unconfirmed_reason(result, self.camera, self.params)}")
+            return _not_found_as(result, "not reported: " + _unconfirmed_reason(result, self.camera, self.params,
+                                                                               len(self.marking_reads)))
         if result.found and not self.marked and self._contested(float(t_s)):
             # confirmed by its place alone while another strip showed a threshold marking: the
             # aircraft can be over a taxiway beside the runway
@@ -317,7 +326,8 @@ class DetectionSequence:
         worn stripes at 3 km), but the next sighting must be followed by another to replace: on
         held-out draw 19 the runway, confirmed by its place, was contested by a strip 1.6 heights
         out read as marked in two searches 1.0 s apart with four between that did not."""
-        if not place_only and result.found and _confirmed(result, self.camera, self.params):
+        if (not place_only and result.found and (_confirmed_by_place(result, self.camera, self.params) or
+                                                 (result.shows_runway_marking and self._marking_at_once(result)))):
             return result, prior
         previous_check_s, self.t_place_check_s = self.t_place_check_s, (t_s if place_only else None)
         if place_only:      # the next check later, unless this one finds a marked strip elsewhere
@@ -339,7 +349,7 @@ class DetectionSequence:
             return result, prior
         if self.good_geometry is None or not _identity_mismatch(fresh, self.camera, self.good_geometry[0], math.nan,
                                                                 dt, self.params):
-            if fresh.shows_runway_marking:
+            if fresh.shows_runway_marking and self._marking_confirms(fresh, t_s):
                 self.confirmed = self.marked = True            # the strip followed, marked
             return result, prior
         # another strip, marked or convincing: it replaces the one followed when the frame
@@ -355,6 +365,26 @@ class DetectionSequence:
             if place_only:
                 self.place_interval_s = self.params.place_recheck_s
         return result, prior
+
+    def _marking_confirms(self, result: DetectionResult, t_s: float) -> bool:
+        """Whether the threshold marking ``result`` shows confirms the strip followed as the
+        runway approached: at once (:meth:`_marking_at_once`), or, on a doubtful strip far beside
+        the approach, read again in another frame within ``weak_marking_window_s`` (held-out
+        draw 4: a taxiway 2.04 heights out at confidence 0.49, read "marked" once at 3.45 km on
+        the sand's blur at its start, was reported to 940 m, 120-490 px off)."""
+        if self._marking_at_once(result):
+            return True
+        window = self.params.weak_marking_window_s
+        self.marking_reads = [t for t in self.marking_reads if 0.0 < t_s - t <= window] + [t_s]
+        return len(self.marking_reads) >= 2
+
+    def _marking_at_once(self, result: DetectionResult) -> bool:
+        """Whether one reading of a threshold marking confirms the strip of ``result``: it is not
+        doubtful (``place_min_confidence``), or lies within ``single_marking_max_lateral_heights``
+        of the aircraft, or its place is not measured."""
+        offset = _lateral_offset(result, self.camera)
+        return (result.confidence >= self.params.place_min_confidence or offset is None
+                or offset[0] <= self.params.single_marking_max_lateral_heights)
 
     def _recheck_due(self, t_s: float) -> bool:
         """Whether the strip followed, confirmed by its place alone, is due for a search of the
@@ -746,7 +776,13 @@ def _lateral_offset(result: DetectionResult, camera: CameraModel) -> tuple[float
 
 def _confirmed(result: DetectionResult, camera: CameraModel, params: DetectorParams) -> bool:
     """Whether the strip of ``result`` is confirmed as the runway approached in this frame: it
-    shows a runway marking, or the aircraft is over it or nearly (``max_lateral_heights_widths``
+    shows a runway marking, or it is :func:`_confirmed_by_place`."""
+    return result.shows_runway_marking or _confirmed_by_place(result, camera, params)
+
+
+def _confirmed_by_place(result: DetectionResult, camera: CameraModel, params: DetectorParams) -> bool:
+    """Whether the strip of ``result`` is confirmed as the runway approached by its place in this
+    frame: the aircraft is over it or nearly (``max_lateral_heights_widths``
     of its widths), or it lies within ``unconfirmed_max_lateral_heights`` camera heights of the
     aircraft, within ``weak_max_lateral_heights`` only when its confidence is below
     ``place_min_confidence`` (:class:`DetectorParams`). Every ground line parallel to the runway
@@ -757,8 +793,6 @@ def _confirmed(result: DetectionResult, camera: CameraModel, params: DetectorPar
     runway's edges held nowhere beyond 1.3 km and a parallel taxiway 0.64 heights out was
     followed from 2.5 km to 100 ft, confidence 0.29-0.56 beyond 1.5 km. A strip whose place
     cannot be measured (no horizon) is not held back."""
-    if result.shows_runway_marking:
-        return True
     offset = _lateral_offset(result, camera)
     if offset is None or offset[1] <= params.max_lateral_heights_widths:
         return True
@@ -773,16 +807,21 @@ def _place_limit_heights(result: DetectionResult, params: DetectorParams) -> flo
             else params.weak_max_lateral_heights)
 
 
-def _unconfirmed_reason(result: DetectionResult, camera: CameraModel, params: DetectorParams) -> str:
-    """Why the strip of ``result``, not :func:`_confirmed`, is not reported (one sentence)."""
+def _unconfirmed_reason(result: DetectionResult, camera: CameraModel, params: DetectorParams,
+                        marking_reads: int = 0) -> str:
+    """Why the strip of ``result``, not confirmed, is not reported (one sentence); ``marking_reads``:
+    the threshold markings read on it that did not confirm it (a doubtful strip far out, one frame's)."""
     heights, widths = _lateral_offset(result, camera)
     limit = _place_limit_heights(result, params)
     why = (f"more than {limit:g} at a confidence of {result.confidence:.2f}, below {params.place_min_confidence:g}"
            if heights <= params.unconfirmed_max_lateral_heights else
            f"more than {params.unconfirmed_max_lateral_heights:g}")
+    shown = ("no threshold marking since it was acquired" if not marking_reads else
+             f"a threshold marking in no two frames within {params.weak_marking_window_s:g} s (asked of a strip at a "
+             f"confidence below {params.place_min_confidence:g}, here {result.confidence:.2f}, more than "
+             f"{params.single_marking_max_lateral_heights:g} camera heights out)")
     return (f"the strip followed lies {heights:.2f} camera heights ({widths:.0f} of its widths) beside the aircraft "
-            f"({why}) and has shown no threshold marking since it was acquired: not confirmed as the runway "
-            "approached (a taxiway or road beside it?)")
+            f"({why}) and has shown {shown}: not confirmed as the runway approached (a taxiway or road beside it?)")
 
 
 def _not_approached(k_centre: float, width_ratio: float, params: DetectorParams) -> bool:

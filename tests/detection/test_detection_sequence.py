@@ -587,6 +587,32 @@ def test_a_strip_confirmed_by_its_place_alone_does_not_replace_the_one_followed(
     assert all(prior is runway[k - 1] for k, prior in priors)                     # the runway followed
 
 
+@pytest.mark.parametrize("beside_m, confidence, marked_frames, reported_from",
+                         [(300.0, 0.4, (5,), None), (300.0, 0.4, (5, 8), 8), (300.0, 0.4, (5, 16), None),
+                          (300.0, 0.9, (5,), 5), (185.0, 0.4, (5,), 5)])
+def test_a_doubtful_strip_far_beside_the_approach_is_confirmed_by_two_markings(monkeypatch, beside_m, confidence,
+                                                                              marked_frames, reported_from):
+    """Seen from thesis-3 at 2.4 km a strip 300 m beside the runway lies 2.1-2.4 camera heights
+    out, one 185 m beside 1.3-1.5. At a confidence of 0.4 (below ``place_min_confidence``) one
+    frame's threshold marking does not confirm the strip beyond
+    ``single_marking_max_lateral_heights`` (held-out draw 4: a taxiway 2.04 heights out at 0.49,
+    the sand's blur at its start read "marked" once); a second reading within
+    ``weak_marking_window_s`` (2 s: frames 5 and 8 at 5 Hz) does, one 2.2 s later starts the
+    count again; at 0.9, or within the bound, one reading is enough."""
+    states, camera, frames, unmarked = _beside_runway_frames(beside_m, False, confidence=confidence)
+    _, _, _, marked = _beside_runway_frames(beside_m, True, confidence=confidence)
+    heights = [seq_module._lateral_offset(r, camera)[0] for r in unmarked]
+    limit = DetectorParams().single_marking_max_lateral_heights
+    assert all(h > limit for h in heights) if beside_m == 300.0 else all(1.0 < h < limit for h in heights)
+    script = [marked[k] if k in marked_frames else unmarked[k] for k in range(len(frames))]
+    results, _ = _replay(monkeypatch, states, camera, frames, script, script)
+    found = [r.found for r in results]
+    expected = [reported_from is not None and k >= reported_from for k in range(len(frames))]
+    assert found == expected, [r.reason for r in results]
+    if reported_from != marked_frames[0]:
+        assert "a threshold marking in no two frames within 2 s" in results[marked_frames[0] + 1].reason
+
+
 @pytest.mark.parametrize("sightings", [2, 1, "apart"])
 def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_by_its_place(monkeypatch, sightings):
     """thesis-3 starts 205 m right of the runway, over a parallel taxiway 185 m out (held-out
