@@ -626,6 +626,22 @@ class DetectorParams(ParamsFile):
         thesis's approaches start within 1.69 heights (thesis-4), and a doubtful runway seen
         from there is confirmed by its second reading. Within that bound (held-out draw 8: its
         runway 1.09 heights out at 3.5 km, confidence 0.3-0.6) one reading confirms.
+    diverging_min_lateral_heights, diverging_window_s, diverging_min_growth : float
+        Over a sequence, a strip followed that lies more than ``diverging_min_lateral_heights``
+        camera heights beside the aircraft in every frame of the last ``diverging_window_s``
+        seconds of its track, its offset grown over them by ``diverging_min_growth`` (a line
+        fitted to the offsets, its rise relative to their mean), is not reported, marked or
+        not: the aircraft is moving away from it, and an approach converges on its runway's
+        centre line (:meth:`~visland.detection.sequence.DetectionSequence._moving_away`). A
+        strip's offset ``Y / h`` grows by ``-v_h / h`` per second once the aircraft stops
+        closing on it (3 % per second at 2.3 km on a 3 deg descent, 7 % at 1 km); measured
+        offsets scatter by about 1 % frame to frame (held-out draw 4's taxiway at 3.6 km: 2.06
+        to 2.10). 1.2 heights is beyond the thesis's approaches while their runway moves away
+        (thesis-8: 0.84 to 1.13 heights from 4.7 to 4.2 km, its initial heading off); thesis-3
+        and thesis-4 start 1.08 and 1.69 heights out and close in. Held-out draw 4: a taxiway
+        beside a runway lost on sand, confirmed by a band inside it read as a displaced
+        threshold's marking, was reported from 2.31 km to 850 m, its offset growing from 1.31
+        to 3.0 heights.
     max_width_change : float
         In tracking, the runway's apparent width (its width over the camera height) may differ
         from the previous frame's by this fraction at most (a parallel taxiway is half as wide).
@@ -1132,6 +1148,9 @@ class DetectorParams(ParamsFile):
     place_recheck_max_s: float = 4.0
     single_marking_max_lateral_heights: float = 1.5
     weak_marking_window_s: float = 2.0
+    diverging_min_lateral_heights: float = 1.2
+    diverging_window_s: float = 4.0
+    diverging_min_growth: float = 0.05
     max_width_change: float = 0.25
     min_confidence: float = 0.25
     corner_min_confidence: float = 0.4
@@ -1332,7 +1351,7 @@ class DetectorParams(ParamsFile):
         "low_contrast_hough_bands": (0.0, 1.0),
         "roi_margin_px": (0.0, 4096.0), "roi_margin_fraction": (0.0, 10.0),
         "threshold_search_fraction": (0.01, 1.0), "horizon_sigma_px": (0.01, 10000.0),
-        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "weak_max_lateral_heights": (0.0, 1e6), "place_min_confidence": (0.0, 1.0), "replacement_min_confidence": (0.0, 1.0), "place_recheck_s": (0.0, 1e6), "place_recheck_max_s": (0.0, 1e6), "single_marking_max_lateral_heights": (0.0, 1e6), "weak_marking_window_s": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
+        "tracking_sigma_px": (0.1, 10000.0), "max_width_change": (0.01, 10.0), "max_lateral_widths": (0.0, 1e6), "max_lateral_heights": (0.0, 1e6), "max_lateral_heights_widths": (0.0, 1e6), "unconfirmed_max_lateral_heights": (0.0, 1e6), "weak_max_lateral_heights": (0.0, 1e6), "place_min_confidence": (0.0, 1.0), "replacement_min_confidence": (0.0, 1.0), "place_recheck_s": (0.0, 1e6), "place_recheck_max_s": (0.0, 1e6), "single_marking_max_lateral_heights": (0.0, 1e6), "weak_marking_window_s": (0.0, 1e6), "diverging_min_lateral_heights": (0.0, 1e6), "diverging_window_s": (0.0, 600.0), "diverging_min_growth": (0.0, 1e6), "min_confidence": (0.0, 1.0), "corner_min_confidence": (0.0, 1.0),
         "ground_margin_px": (0.0, 1000.0), "contrast_sample_step": (1, 64, "int"),
         "contrast_percentiles": (0.0, 100.0), "roi_min_side_px": (1.0, 10000.0),
         "tracking_sigma_width_fraction": (0.0, 10.0), "edge_depth_inset_fraction": (0.0, 0.49),

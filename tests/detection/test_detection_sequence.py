@@ -613,6 +613,24 @@ def test_a_doubtful_strip_far_beside_the_approach_is_confirmed_by_two_markings(m
         assert "a threshold marking in no two frames within 2 s" in results[marked_frames[0] + 1].reason
 
 
+@pytest.mark.parametrize("beside_m, refused_from", [(300.0, 20), (-185.0, 20), (0.0, None)])
+def test_a_marked_strip_the_aircraft_moves_away_from_is_not_reported(monkeypatch, beside_m, refused_from):
+    """thesis-3 from 2.4 km, aligned with the runway (0.02 heights out): a strip 300 m beside it
+    lies 2.12 -> 2.44 camera heights out over 6 s, one 185 m on the other side 1.28 -> 1.49, both
+    growing as the aircraft descends. Marked and confident, each is reported until its offset has
+    stayed beyond ``diverging_min_lateral_heights`` (1.2) for ``diverging_window_s`` (4 s: frame
+    20 at 5 Hz) while growing, and not after ("moving away from it"); the runway itself is
+    reported throughout."""
+    states, camera, frames, script = _beside_runway_frames(beside_m, True, confidence=0.9, n=30)
+    results, priors = _replay(monkeypatch, states, camera, frames, script, script)
+    found = [r.found for r in results]
+    expected = [0 < k and (refused_from is None or k < refused_from) for k in range(len(frames))]   # (frame 0: a new track)
+    assert found == expected, [r.reason for r in results]
+    if refused_from is not None:
+        assert "the aircraft is moving away from it" in results[refused_from].reason
+        assert len(priors) == len(frames) - 1                         # followed all along, not reported
+
+
 @pytest.mark.parametrize("sightings", [2, 1, "apart"])
 def test_a_marked_runway_found_afresh_contests_then_replaces_a_strip_confirmed_by_its_place(monkeypatch, sightings):
     """thesis-3 starts 205 m right of the runway, over a parallel taxiway 185 m out (held-out
