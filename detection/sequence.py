@@ -79,6 +79,13 @@ A threshold marking read once on a doubtful strip farther than
 again within ``weak_marking_window_s``: on held-out draw 4 (a concrete runway lost on sand at
 dusk) the sand's blur at a taxiway's start, 2.04 heights out, was read as paint in one frame.
 
+A strip that has lain more than ``diverging_min_lateral_heights`` (1.2) beside the aircraft for
+the last ``diverging_window_s`` (4 s) of its track while its offset grew (``diverging_min_growth``,
+5 %) is followed but not reported, marked or not: an approach converges on its runway's centre
+line, and the aircraft is moving away from that strip (:meth:`DetectionSequence._moving_away`;
+draw 4 again: the same taxiway, confirmed from 2.31 km by a band inside it read as a displaced
+threshold's marking, its offset growing from 1.31 to 3.0 heights).
+
 A new track (no good detection within ``hold_s``) is followed from its first frame but reported
 from its ``new_track_frames``-th (2): a strip found in one frame only can be a road or a taxiway
 that the next frame refuses, and then it was a confident wrong answer. On the independent
