@@ -391,7 +391,8 @@ class DetectionSequence:
         ``diverging_min_lateral_heights`` camera heights beside the aircraft in every frame of
         the last ``diverging_window_s`` of its track and its offset grew over them by at least
         ``diverging_min_growth`` (a straight line fitted to the offsets, its rise over the window
-        relative to their mean); None otherwise. An approach converges on its runway's centre
+        relative to their mean); None otherwise. This frame's offset is added to the track's
+        ``place_history`` (emptied when the place is not measured). An approach converges on its runway's centre
         line, and the offset of a strip beside it, ``Y / h`` at a lateral distance ``Y``, grows as
         the aircraft descends once the aircraft has stopped closing on it: ``(v_Y - k v_h) / h``
         per second, 3 % of it per second at 2.3 km on a 3 deg descent. Held-out draw 4: a
@@ -424,7 +425,8 @@ class DetectionSequence:
         runway approached: at once (:meth:`_marking_at_once`), or, on a doubtful strip far beside
         the approach, read again in another frame within ``weak_marking_window_s`` (held-out
         draw 4: a taxiway 2.04 heights out at confidence 0.49, read "marked" once at 3.45 km on
-        the sand's blur at its start, was reported to 940 m, 120-490 px off)."""
+        the sand's blur at its start, was reported to 850 m, near corners 136-533 px off). A
+        reading that does not confirm at once is kept in ``marking_reads``."""
         if self._marking_at_once(result):
             return True
         window = self.params.weak_marking_window_s
