@@ -266,12 +266,16 @@ class DetectionSequence:
             self.t_place_check_s = self.place_interval_s = None
             self.marking_reads = []
             self.place_history = []
+        geometry = offset = None
         if result.found:
+            geometry = _ground_geometry(result, self.camera)        # (the strip's place, once a frame)
+            offset = _offset_of(geometry)
             # a marking seen confirms the track for good (on a doubtful strip far beside the
             # approach, read in two frames); its place alone, only the frame it holds in (a
             # parallel taxiway within a height at 2.4 km is several heights out at 1 km)
-            self.marked = self.marked or (result.shows_runway_marking and self._marking_confirms(result, float(t_s)))
-            self.confirmed = self.marked or _confirmed_by_place(result, self.camera, self.params)
+            self.marked = self.marked or (result.shows_runway_marking
+                                          and self._marking_confirms(result, offset, float(t_s)))
+            self.confirmed = self.marked or _confirmed_by_place(result, offset, self.params)
         moving_away = None
         if result.found:
             self.track_frames = 1 if prior is None else self.track_frames + 1
@@ -279,7 +283,7 @@ class DetectionSequence:
                 self.track_frames = max(self.track_frames, self.params.new_track_frames)
             self.last_good = result
             self.t_good_s = float(t_s)
-            self.good_geometry = geometry = _ground_geometry(result, self.camera)
+            self.good_geometry = geometry
             moving_away = self._moving_away(geometry, float(t_s))
             if moving_away:
                 self.confirmed = False                            # (the whole frame searched afresh)
@@ -300,7 +304,7 @@ class DetectionSequence:
             # followed (the next frame's prior) but not reported: a taxiway beside a runway
             # lost in fog passes every other test
             last_read_s = float(t_s) - self.marking_reads[-1] if self.marking_reads else None
-            return _not_found_as(result, "not reported: " + _unconfirmed_reason(result, self.camera, self.params,
+            return _not_found_as(result, "not reported: " + _unconfirmed_reason(result, offset, self.params,
                                                                                last_read_s))
         if result.found and not self.marked and self._contested(float(t_s)):
             # confirmed by its place alone while another strip showed a threshold marking: the
@@ -319,8 +323,8 @@ class DetectionSequence:
     def _look_for_confirmed(self, result: DetectionResult, prior: DetectionResult, image, roll_rad: float,
                             pitch_rad: float, dt: float, t_s: float,
                             place_only: bool = False) -> tuple[DetectionResult, DetectionResult | None]:
-        """While the strip followed is not confirmed as the runway (:func:`_confirmed`), the whole
-        frame is searched afresh each frame: another strip found there with a threshold marking
+        """While the strip followed is not confirmed as the runway (by a threshold marking or
+        :func:`_confirmed_by_place`), the whole frame is searched afresh each frame: another strip found there with a threshold marking
         (:attr:`~visland.detection.result.DetectionResult.shows_runway_marking`) in this frame and
         the one before is the runway, and
         replaces the track (``(found, None)``: the frame starts a new one); the same strip found
@@ -345,14 +349,17 @@ class DetectionSequence:
         worn stripes at 3 km), but the next sighting must be followed by another to replace: on
         held-out draw 19 the runway, confirmed by its place, was contested by a strip 1.6 heights
         out read as marked in two searches 1.0 s apart with four between that did not."""
-        if (not place_only and result.found and (_confirmed_by_place(result, self.camera, self.params) or
-                                                 (result.shows_runway_marking and self._marking_at_once(result)))):
+        offset = _lateral_offset(result, self.camera) if result.found and not place_only else None
+        if (not place_only and result.found and (_confirmed_by_place(result, offset, self.params) or
+                                                 (result.shows_runway_marking and self._marking_at_once(result, offset)))):
             return result, prior
         previous_check_s, self.t_place_check_s = self.t_place_check_s, (t_s if place_only else None)
         if place_only:      # the next check later, unless this one finds a marked strip elsewhere
             self.place_interval_s = (self.params.place_recheck_s if self.place_interval_s is None else
                                      min(2.0 * self.place_interval_s, self.params.place_recheck_max_s))
         fresh = detect_runway(image, self.camera, roll_rad, pitch_rad, params=self.params)
+        geometry = _ground_geometry(fresh, self.camera) if fresh.found else None
+        fresh_offset = _offset_of(geometry)
         candidate = self.replacement
         if candidate is not None and t_s - candidate.t_s > self.params.hold_s:
             candidate = None
@@ -363,17 +370,16 @@ class DetectionSequence:
         weak = not result.found or result.confidence < self.params.place_min_confidence
         convincing = (not place_only and weak and fresh.found
                       and fresh.confidence >= self.params.replacement_min_confidence
-                      and _confirmed(fresh, self.camera, self.params))
+                      and (fresh.shows_runway_marking or _confirmed_by_place(fresh, fresh_offset, self.params)))
         if not (fresh.found and (fresh.shows_runway_marking or convincing)):
             return result, prior
         if self.good_geometry is None or not _identity_mismatch(fresh, self.camera, self.good_geometry[0], math.nan,
                                                                 dt, self.params):
-            if fresh.shows_runway_marking and self._marking_confirms(fresh, t_s):
+            if fresh.shows_runway_marking and self._marking_confirms(fresh, fresh_offset, t_s):
                 self.confirmed = self.marked = True            # the strip followed, marked
             return result, prior
         # another strip, marked or convincing: it replaces the one followed when the frame
         # before found it too (one frame's marking can be a texture's end read as paint)
-        geometry = _ground_geometry(fresh, self.camera)
         if (candidate is not None and geometry is not None
                 and not _identity_mismatch(fresh, self.camera, candidate.k_centre, math.nan, t_s - candidate.t_s,
                                            self.params)):
@@ -420,24 +426,24 @@ class DetectionSequence:
                 f"by {100.0 * growth:.0f} % over them (from {heights[0]:.2f}): the aircraft is moving away from it, not "
                 "approaching it (a taxiway or runway beside the one approached?)")
 
-    def _marking_confirms(self, result: DetectionResult, t_s: float) -> bool:
+    def _marking_confirms(self, result: DetectionResult, offset: tuple[float, float] | None, t_s: float) -> bool:
         """Whether the threshold marking ``result`` shows confirms the strip followed as the
         runway approached: at once (:meth:`_marking_at_once`), or, on a doubtful strip far beside
         the approach, read again in another frame within ``weak_marking_window_s`` (held-out
         draw 4: a taxiway 2.04 heights out at confidence 0.49, read "marked" once at 3.45 km on
         the sand's blur at its start, was reported to 850 m, near corners 136-533 px off). A
         reading that does not confirm at once is kept in ``marking_reads``."""
-        if self._marking_at_once(result):
+        if self._marking_at_once(result, offset):
             return True
         window = self.params.weak_marking_window_s
         self.marking_reads = [t for t in self.marking_reads if 0.0 < t_s - t <= window] + [t_s]
         return len(self.marking_reads) >= 2
 
-    def _marking_at_once(self, result: DetectionResult) -> bool:
-        """Whether one reading of a threshold marking confirms the strip of ``result``: it is not
-        doubtful (``place_min_confidence``), or lies within ``single_marking_max_lateral_heights``
-        of the aircraft, or its place is not measured."""
-        offset = _lateral_offset(result, self.camera)
+    def _marking_at_once(self, result: DetectionResult, offset: tuple[float, float] | None) -> bool:
+        """Whether one reading of a threshold marking confirms the strip of ``result``, ``offset``
+        (:func:`_lateral_offset`) beside the aircraft: it is not doubtful
+        (``place_min_confidence``), or lies within ``single_marking_max_lateral_heights`` of the
+        aircraft, or its place is not measured."""
         return (result.confidence >= self.params.place_min_confidence or offset is None
                 or offset[0] <= self.params.single_marking_max_lateral_heights)
 
@@ -822,22 +828,20 @@ def _lateral_offset(result: DetectionResult, camera: CameraModel) -> tuple[float
     """``(|Y| / h, |Y| / W)``: how far to the side of the aircraft the strip's centre line lies,
     in camera heights and in the strip's own widths (:func:`_ground_geometry`); None if not
     measurable."""
-    geometry = _ground_geometry(result, camera)
+    return _offset_of(_ground_geometry(result, camera))
+
+
+def _offset_of(geometry: tuple[float, float] | None) -> tuple[float, float] | None:
+    """:func:`_lateral_offset` from a strip's :func:`_ground_geometry` already computed."""
     if geometry is None:
         return None
     heights = abs(geometry[0])
     return heights, (heights / geometry[1] if geometry[1] > 0 else math.inf)
 
 
-def _confirmed(result: DetectionResult, camera: CameraModel, params: DetectorParams) -> bool:
-    """Whether the strip of ``result`` is confirmed as the runway approached in this frame: it
-    shows a runway marking, or it is :func:`_confirmed_by_place`."""
-    return result.shows_runway_marking or _confirmed_by_place(result, camera, params)
-
-
-def _confirmed_by_place(result: DetectionResult, camera: CameraModel, params: DetectorParams) -> bool:
-    """Whether the strip of ``result`` is confirmed as the runway approached by its place in this
-    frame: the aircraft is over it or nearly (``max_lateral_heights_widths``
+def _confirmed_by_place(result: DetectionResult, offset: tuple[float, float] | None, params: DetectorParams) -> bool:
+    """Whether the strip of ``result``, ``offset`` (:func:`_lateral_offset`) beside the aircraft,
+    is confirmed as the runway approached by its place in this frame: the aircraft is over it or nearly (``max_lateral_heights_widths``
     of its widths), or it lies within ``unconfirmed_max_lateral_heights`` camera heights of the
     aircraft, within ``weak_max_lateral_heights`` only when its confidence is below
     ``place_min_confidence`` (:class:`DetectorParams`). Every ground line parallel to the runway
@@ -848,7 +852,6 @@ def _confirmed_by_place(result: DetectionResult, camera: CameraModel, params: De
     runway's edges held nowhere beyond 1.3 km and a parallel taxiway 0.64 heights out was
     followed from 2.5 km to 100 ft, confidence 0.29-0.56 beyond 1.5 km. A strip whose place
     cannot be measured (no horizon) is not held back."""
-    offset = _lateral_offset(result, camera)
     if offset is None or offset[1] <= params.max_lateral_heights_widths:
         return True
     return offset[0] <= _place_limit_heights(result, params)
@@ -862,12 +865,13 @@ def _place_limit_heights(result: DetectionResult, params: DetectorParams) -> flo
             else params.weak_max_lateral_heights)
 
 
-def _unconfirmed_reason(result: DetectionResult, camera: CameraModel, params: DetectorParams,
+def _unconfirmed_reason(result: DetectionResult, offset: tuple[float, float], params: DetectorParams,
                         last_read_s: float | None = None) -> str:
-    """Why the strip of ``result``, not confirmed, is not reported (one sentence); ``last_read_s``:
+    """Why the strip of ``result``, ``offset`` (:func:`_lateral_offset`) beside the aircraft, not
+    confirmed, is not reported (one sentence); ``last_read_s``:
     how long ago a threshold marking was last read on it without confirming it (a doubtful strip
     far out, read in one frame only), None if none was."""
-    heights, widths = _lateral_offset(result, camera)
+    heights, widths = offset
     limit = _place_limit_heights(result, params)
     why = (f"more than {limit:g} at a confidence of {result.confidence:.2f}, below {params.place_min_confidence:g}"
            if heights <= params.unconfirmed_max_lateral_heights else
