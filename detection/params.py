@@ -820,6 +820,9 @@ class DetectorParams(ParamsFile):
     marking_unresolved_plain_px : float
         Unresolved: depth pixels of plain pavement at its start before a brighter line makes the
         threshold doubtful.
+    marking_brighter_ground_fraction : float
+        Markings must outshine the pavement by the ground's step where the ground is darker; where
+        it is brighter (snow), by this fraction of that step: white paint cannot outshine snow.
     marking_bright_percentile : float
         The markings' grey level is this percentile of the pavement's samples (white paint); a
         sample is marked when brighter than the pavement by half their difference.
@@ -1220,6 +1223,7 @@ class DetectorParams(ParamsFile):
     marking_start_fraction: float = 0.25
     marking_unresolved_coverage: float = 0.6
     marking_unresolved_plain_px: float = 3.0
+    marking_brighter_ground_fraction: float = 0.25
     marking_bright_percentile: float = 99.0
     marking_quarter_min_share: float = 0.15
     marked_start_widths: float = 1.6
@@ -1383,6 +1387,7 @@ class DetectorParams(ParamsFile):
         "marking_column_span": (0.0, 1.0), "marking_min_resolved_px": (0.0, 1000.0),
         "marking_unresolved_min_span_px": (0.0, 10000.0), "marking_start_fraction": (0.0, 10.0),
         "marking_unresolved_coverage": (0.0, 1.0), "marking_unresolved_plain_px": (0.0, 1000.0),
+        "marking_brighter_ground_fraction": (0.0, 10.0),
         "marking_bright_percentile": (50.0, 100.0), "marking_quarter_min_share": (0.0, 1.0), "marked_start_widths": (0.0, 100.0), "marked_start_skip_px": (0.0, 100.0),
         "marking_bar_coverage": (0.0, 1.0), "marking_min_stripes": (1, 1000, "int"), "marking_stripes_min_widths": (0.0, 100.0), "marking_stripes_resolved_px": (0.0, 1000.0), "confidence_residual_px": (0.01, 100.0),
         "confidence_vp_sigmas": (0.1, 100.0), "confidence_contrast_factor": (0.1, 1000.0),

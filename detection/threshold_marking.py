@@ -319,8 +319,16 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
             # the threshold placed where it begins, 8-9 px short, from 2.6 to 1.3 km)
             doubtful = doubtful or ThresholdMarking(line=None, kind="unresolved", pavement_widths=float(
                 widths_along(fx, d_pavement, d_first_rise, width_k)))
-    if not contrast >= max(2.0 * min_step, abs(pavement_step)):
+    # beside a brighter ground (snow) the paint cannot be asked to outshine the pavement by the
+    # ground's step: white paint on concrete is dimmer than snow (held-out draw 15, a displaced
+    # threshold beside snow in haze: bar and stripes 20-29 levels over the concrete, the snow's
+    # step 36-42; the threshold stayed where the pavement begins, 195-688 px short, from 540 to
+    # 350 m). Paint that passes only so must show stripes (below): a lighter patch across the
+    # width is a bar as well (held-out draw 10, patched concrete on snow, a patch 11 widths in)
+    ground_scale = pavement_step if pavement_step >= 0.0 else -params.marking_brighter_ground_fraction * pavement_step
+    if not contrast >= max(2.0 * min_step, ground_scale):
         return doubtful
+    dim_paint = not contrast >= abs(pavement_step)
     marked = np.nan_to_num((values - surface) * sign, nan=-1.0) > 0.5 * contrast
     coverage = marked.mean(axis=1)
     spans_all, runs = _marks_across(marked, params)
@@ -341,6 +349,11 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         return doubtful
     first, kind, marks_end = found
     d_band = float(depths[first])
+    if dim_paint and np.count_nonzero((is_stripes & ~is_bar & (depths >= depth_along(
+            fx, d_band, STRIPES_FROM_THRESHOLD_WIDTHS + params.marking_stripes_min_widths, width_k)))[first:]) < 2:
+        # dimmer than the brighter ground's step and not stripes on two lines at least: a lighter
+        # patch (draw 10's is a bar over four lines, the blur of its edge three runs on one)
+        return doubtful
     widths_in = widths_along(fx, d_pavement, d_band, width_k)
     if not (min_pavement_widths <= widths_in <= max_pavement_widths):
         return doubtful
@@ -765,8 +778,10 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
     threshold was kept on a patch's step 9 px inside the runway, the ground "beginning" in grey
     levels 1.7 px past it). Returns the depth of the
     first ``min_ground_px`` of ground rows (``d_from`` itself when the ground begins at once) and
-    the grey-level step from the ground to the runway's surface (the smaller of the two sides;
-    NaN when only the chroma tells them apart); ``(inf, step)`` when no ground has begun by
+    the grey-level step from the ground to the runway's surface (the pavement's level less the
+    ground's, negative beside a brighter ground, as
+    :func:`visland.detection.transverse.find_transverse_line`'s step; the
+    smaller of the two sides; NaN when only the chroma tells them apart); ``(inf, step)`` when no ground has begun by
     ``d_to`` (the rows all in the frame); None when the frame cannot tell (no clear difference between the
     runway and the ground beside it, rows outside the image).
 
@@ -839,7 +854,7 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
             pavement, contrasts = None, []         # grey levels cannot tell (the chroma may)
             break
         pavement &= (middle - side) * math.copysign(1.0, contrast) > 0.5 * abs(contrast)
-        contrasts.append(abs(contrast))
+        contrasts.append(contrast)
     in_chroma = (_chroma_pavement(colour, horizon, s0, k_centre, line_left, line_right, d_from, step_d_px, depths,
                                   grid, inside, rows_ok, (n0, n1), params) if colour is not None else None)
     if in_chroma is not None:
@@ -854,10 +869,10 @@ def ground_begins(image, horizon: HorizonFrame, s0: float, left: PixelLine, righ
         if run >= need:
             first = i - need + 1
             depth = float(d_from) if first == 0 else float(depths[first] - 0.5 * step_d_px)
-            return depth, min(contrasts) if contrasts else math.nan
+            return depth, min(contrasts, key=abs) if contrasts else math.nan
         if not rows_ok[i]:
             return None
-    return math.inf, min(contrasts) if contrasts else math.nan
+    return math.inf, min(contrasts, key=abs) if contrasts else math.nan
 
 
 def _chroma_pavement(colour, horizon: HorizonFrame, s0: float, k_centre: float, line_left, line_right,

@@ -109,8 +109,11 @@ def test_a_blast_pads_start_beside_snow_is_not_taken_for_the_threshold(monkeypat
     before a 42 m wide runway, snow, monochrome, worn paint), a sequence started 2.32 km out:
     where the pad begins is the strongest transverse step, the snow's blur into it was read as a
     bar at the pavement's start, and the threshold was reported there, 8.8-9.1 px short (110
-    frames of the study from 3.6 to 1.3 km). The threshold is withheld, no corner 5 px off; with
-    the blur read as before, a near corner more than 5 px off is reported."""
+    frames of the study from 3.6 to 1.3 km). No corner is 5 px off: the threshold is withheld, or
+    placed on the worn stripes 127 m in (within a pixel: their 28-30 levels over the asphalt pass
+    the markings' gate beside the brighter snow since it asks a quarter of the snow's step, in
+    one frame of the four); with the blur read as before, a near corner more than 5 px off is
+    reported."""
     import visland.detection.threshold_marking as marking
     from visland.detection import DetectionSequence
 
@@ -126,7 +129,8 @@ def test_a_blast_pads_start_beside_snow_is_not_taken_for_the_threshold(monkeypat
     results, errors = run()
     assert all(r.found for r in results[1:]), [r.reason for r in results]
     assert not any(e["gross"] for e in errors), errors
-    assert not any(r.corners_found[:2].any() for r in results[1:]), [r.reason for r in results]
+    placed = [e["near_px"] for r, e in zip(results[1:], errors[1:]) if r.corners_found[:2].any()]
+    assert all(near <= 1.0 for near in placed), (placed, [r.reason for r in results])
     monkeypatch.setattr(marking, "_ground_blur_lines", lambda level, min_step: 0)
     _, errors = run()
     assert any(e["gross"] for e in errors), errors

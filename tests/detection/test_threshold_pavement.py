@@ -85,6 +85,10 @@ def test_a_patch_at_the_grass_grey_level_is_not_where_the_ground_begins():
     # grey levels: the patch looks like grass, the ground "begins" at the patch's edge
     in_grey = ground_begins(grey, horizon, s0, left, right, d_patch_end, search_to, surface_level=78.0, min_step=8.0)
     assert in_grey is not None and in_grey[0] < d_patch_end + 3.0, (in_grey, d_patch_end, d_threshold)
+    # the step is signed as the transverse line's, the pavement's level less the ground's: the
+    # asphalt's 78 against the brighter grass's 105 (it was unsigned, and a threshold moved to
+    # where the ground begins beside snow was searched for markings as beside a darker ground)
+    assert -40.0 < in_grey[1] < -10.0, in_grey
     # with the colour, the pavement runs on to the threshold
     found = ground_begins(grey, horizon, s0, left, right, d_patch_end, search_to, surface_level=78.0, min_step=8.0,
                           colour=colour)
