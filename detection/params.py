@@ -823,6 +823,14 @@ class DetectorParams(ParamsFile):
     marking_brighter_ground_fraction : float
         Markings must outshine the pavement by the ground's step where the ground is darker; where
         it is brighter (snow), by this fraction of that step: white paint cannot outshine snow.
+        Paint that passes only so must show clear stripes (the next three).
+    marking_dim_stripes_widths, marking_dim_stripes_share, marking_dim_min_stripes : float, float, int
+        Clear stripes: over this many runway widths from their first line (0.5: 30 m, the
+        shortest threshold stripes, on a 60 m runway), this share of the lines read crosses this
+        many separate marks at least (4: the fewest threshold stripes).
+    marking_dim_texture_ratio : float
+        And those lines cross this many times as many marks as the pavement's lines before them
+        (medians): not the surface's own blotches.
     marking_bright_percentile : float
         The markings' grey level is this percentile of the pavement's samples (white paint); a
         sample is marked when brighter than the pavement by half their difference.
@@ -1224,6 +1232,10 @@ class DetectorParams(ParamsFile):
     marking_unresolved_coverage: float = 0.6
     marking_unresolved_plain_px: float = 3.0
     marking_brighter_ground_fraction: float = 0.25
+    marking_dim_stripes_widths: float = 0.5
+    marking_dim_stripes_share: float = 0.75
+    marking_dim_min_stripes: int = 4
+    marking_dim_texture_ratio: float = 1.5
     marking_bright_percentile: float = 99.0
     marking_quarter_min_share: float = 0.15
     marked_start_widths: float = 1.6
@@ -1387,7 +1399,9 @@ class DetectorParams(ParamsFile):
         "marking_column_span": (0.0, 1.0), "marking_min_resolved_px": (0.0, 1000.0),
         "marking_unresolved_min_span_px": (0.0, 10000.0), "marking_start_fraction": (0.0, 10.0),
         "marking_unresolved_coverage": (0.0, 1.0), "marking_unresolved_plain_px": (0.0, 1000.0),
-        "marking_brighter_ground_fraction": (0.0, 10.0),
+        "marking_brighter_ground_fraction": (0.0, 10.0), "marking_dim_stripes_widths": (0.0, 100.0),
+        "marking_dim_stripes_share": (0.0, 1.0), "marking_dim_min_stripes": (1, 1000, "int"),
+        "marking_dim_texture_ratio": (0.0, 100.0),
         "marking_bright_percentile": (50.0, 100.0), "marking_quarter_min_share": (0.0, 1.0), "marked_start_widths": (0.0, 100.0), "marked_start_skip_px": (0.0, 100.0),
         "marking_bar_coverage": (0.0, 1.0), "marking_min_stripes": (1, 1000, "int"), "marking_stripes_min_widths": (0.0, 100.0), "marking_stripes_resolved_px": (0.0, 1000.0), "confidence_residual_px": (0.01, 100.0),
         "confidence_vp_sigmas": (0.1, 100.0), "confidence_contrast_factor": (0.1, 1000.0),
