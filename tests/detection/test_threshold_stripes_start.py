@@ -43,13 +43,26 @@ def _paint(x_m, y_m, bar, stripes=True, bar_m=1.8):
     return painted.astype(float)
 
 
+def _blotches(x_m, y_m, amplitude):
+    """A concrete surface's lighter and darker blotches, ``amplitude`` grey levels at most: a sum
+    of waves 2-10 m long along the runway and 1-4 m across (seeded)."""
+    if not amplitude:
+        return 0.0
+    rng = np.random.default_rng(7)
+    total = 0.0
+    for _ in range(8):
+        kx, ky = 2.0 * np.pi / rng.uniform(2.0, 10.0), 2.0 * np.pi / rng.uniform(1.0, 4.0)
+        total = total + np.cos(kx * x_m + rng.uniform(-1.0, 1.0) * ky * y_m + rng.uniform(0.0, 2.0 * np.pi))
+    return amplitude * np.clip(total / 3.0, -1.0, 1.0)
+
+
 def _frame(threshold_m, bar, height_m=HEIGHT_M, before_m=DISPLACED_M, grass=GRASS, pavement=PAVEMENT, paint=PAINT,
-           stripes=True, bar_m=1.8):
+           stripes=True, bar_m=1.8, blotches=0.0):
     """Grey 2048 px frame and its horizon, edges and params, and the threshold's depth below the
     horizon, for a threshold ``threshold_m`` ahead seen from ``height_m`` above the ground, with
     ``before_m`` of pavement before it, the ground at grey level ``grass``, the pavement at
     ``pavement`` and the paint at ``paint`` (a band ``bar_m`` long across the width where ``bar``,
-    the stripes after it where ``stripes``)."""
+    the stripes after it where ``stripes``), the surface's blotches ``blotches`` levels at most."""
     camera = CameraModel.default(2048)
     horizon = horizon_frame(camera, 0.0, math.radians(2.0))
     f = camera.fx
@@ -61,18 +74,19 @@ def _frame(threshold_m, bar, height_m=HEIGHT_M, before_m=DISPLACED_M, grass=GRAS
         with np.errstate(divide="ignore", invalid="ignore"):
             x_m = f * height_m / d - threshold_m             # metres past the threshold
             y_m = (s - S0) * height_m / d                    # metres right of the centre line
-        on_runway = (d > 0) & (np.abs(y_m) <= 0.5 * WIDTH_M) & (x_m >= -before_m)
-        return on_runway, np.where(on_runway, _paint(x_m, y_m, bar, stripes, bar_m), 0.0), d
+            on_runway = (d > 0) & (np.abs(y_m) <= 0.5 * WIDTH_M) & (x_m >= -before_m)
+            surface = pavement + np.where(on_runway, _blotches(x_m, y_m, blotches), 0.0)
+        return on_runway, np.where(on_runway, _paint(x_m, y_m, bar, stripes, bar_m), 0.0), d, surface
 
-    on_runway, _, d = ground(0, camera.height, 1)
-    grey = np.where(on_runway, pavement, grass)
+    on_runway, _, d, surface = ground(0, camera.height, 1)
+    grey = np.where(on_runway, surface, grass)
     grey[d < 0] = 220.0
     # the marking's rows, supersampled: the paint averaged over each pixel
     d_thr = f * height_m / threshold_m
     rows = np.flatnonzero((d[:, camera.width // 2] < d_thr + 3) & (d[:, camera.width // 2] > d_thr * 0.9))
     v0, v1 = int(rows.min()), int(rows.max()) + 1
-    inside, share, _ = ground(v0, v1, SUPERSAMPLE)
-    fine = np.where(inside, pavement + share * (paint - pavement), grass)
+    inside, share, _, surface = ground(v0, v1, SUPERSAMPLE)
+    fine = np.where(inside, surface + share * (paint - surface), grass)
     grey[v0:v1] = fine.reshape(v1 - v0, SUPERSAMPLE, camera.width, SUPERSAMPLE).mean(axis=(1, 3))
     grey = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), 0.5).round().astype(np.uint8)
 
@@ -142,6 +156,20 @@ def test_a_band_without_stripes_beside_a_brighter_ground_must_outshine_it(paint)
         assert abs(found.line.depth_px - d_thr) <= 0.5, (found.line.depth_px, d_thr)
     else:
         assert found is None or found.line is None, found
+
+
+def test_dim_stripes_on_a_blotched_concrete_beside_snow_are_placed():
+    """Stripes 22 levels over a concrete whose blotches reach 6 levels, beside snow 40 over it:
+    they cross more marks than the blotches do on the pavement before them, and are placed (the
+    blotches alone, held-out draw 13: tests/detection/test_detection_doubtful_corners.py)."""
+    pavement, ground, threshold_m = 168.0, 208.0, 1000.0
+    grey, horizon, left, right, params, d_thr = _frame(threshold_m, True, grass=ground, pavement=pavement,
+                                                       paint=190.0, blotches=6.0)
+    d_pavement = horizon.camera.fx * HEIGHT_M / (threshold_m - DISPLACED_M)
+    found = threshold_marking(grey, horizon, S0, left, right, d_pavement, 20.0, params.min_contrast,
+                              surface_level=pavement, pavement_step=pavement - ground, params=params)
+    assert found is not None and found.line is not None
+    assert abs(found.line.depth_px - d_thr) <= 0.5, (found.line.depth_px, d_thr)
 
 
 def test_a_threshold_on_the_stripes_start_is_told_where_the_setback_spans_a_pixel():
