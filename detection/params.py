@@ -1235,7 +1235,7 @@ class DetectorParams(ParamsFile):
     marking_dim_stripes_widths: float = 0.5
     marking_dim_stripes_share: float = 0.75
     marking_dim_min_stripes: int = 4
-    marking_dim_texture_ratio: float = 1.5
+    marking_dim_texture_ratio: float = 3.0
     marking_bright_percentile: float = 99.0
     marking_quarter_min_share: float = 0.15
     marked_start_widths: float = 1.6

@@ -729,8 +729,9 @@ def _clear_stripes(runs: np.ndarray, is_stripes: np.ndarray, rows_ok: np.ndarray
     15's stripes at 540 m: 9 to 11 on ten lines running; draw 12's worn stripes at 2.3 km: 6,
     8). Their lines must also cross ``params.marking_dim_texture_ratio`` times as many marks as
     the pavement's lines before them (medians): the blotches of a concrete surface beside snow
-    cross 3 to 7 on every line (draw 13 at 970 m: 6, 6 where its lines before cross 5; draw
-    15's before its stripes, 5)."""
+    cross 3 to 8 on every line (held-out draws 13 and 16 from 1 km to 50 m: medians 1.0 to 1.75
+    times the pavement's before them; draw 15's stripes 9 to 10 times, draw 12's over plain
+    asphalt, no mark before them)."""
     striped = np.flatnonzero(is_stripes[first:])
     if not len(striped):
         return False

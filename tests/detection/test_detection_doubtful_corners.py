@@ -143,7 +143,7 @@ def test_a_concrete_surfaces_blotches_beside_snow_are_not_taken_for_stripes():
     concrete are read beside it when they show clear stripes; the concrete's blotches cross 4 to
     7 marks on every line, and with that the only test, they were read as stripes 2.3 widths in
     at 970 m (near corners 10.6 px off; 28 frames of the study from 1.0 km to 220 m, up to 106
-    px). Stripes must cross 1.5 times as many marks as the pavement before them: no corner 5 px
+    px). Stripes must cross 3 times as many marks as the pavement before them: no corner 5 px
     off; without that, one is."""
     import dataclasses
 
