@@ -10,7 +10,9 @@ threshold (ICAO Annex 14, 5.2.4; FAA AC 150/5340-1, 20 ft).
 From the pavement's start the runway is read inwards along transverse lines (through V2, the
 vanishing point of the ground direction across the runway): per line, which samples between
 the edges are markings (white paint: brighter than the pavement by more than the pavement
-differs from the ground). A line belongs to the threshold marking when it holds markings in every quarter of the
+differs from a darker ground; beside a brighter ground, snow, which paint cannot outshine, by a
+quarter of that difference, and then only as clear stripes standing out from the surface's own
+blotches). A line belongs to the threshold marking when it holds markings in every quarter of the
 width, either as one bar covering most of it or as several separate stripes. Other markings
 do not: the centre line, arrows and the designation are central, touchdown-zone and aiming-point
 marks leave the middle free, and a chevron's two arms cross a line at two places only.
