@@ -351,12 +351,12 @@ def threshold_marking(image, horizon: HorizonFrame, s0: float, left: PixelLine, 
         return doubtful
     first, kind, marks_end = found
     d_band = float(depths[first])
+    widths_in = widths_along(fx, d_pavement, d_band, width_k)
+    if not (min_pavement_widths <= widths_in <= max_pavement_widths):
+        return doubtful
     if dim_paint and not _clear_stripes(runs, is_stripes & ~is_bar, rows_ok, depths, first, fx, width_k, params):
         # dimmer than the brighter ground's step, and no clear stripes: a lighter patch, the
         # concrete's own blotches (held-out draws 10 and 13, concrete beside snow)
-        return doubtful
-    widths_in = widths_along(fx, d_pavement, d_band, width_k)
-    if not (min_pavement_widths <= widths_in <= max_pavement_widths):
         return doubtful
     if d_band < d_first_rise - ONE_LINE_PX:
         # a brighter line nearer the pavement's start than the band: the band is a mark farther
