@@ -316,6 +316,12 @@ class DetectorParams(ParamsFile):
         hold the surface's own level in at least this fraction and are at least this many; rows
         of the surface on the other side of the ground's level past the run's end (a surface that
         changes along the runway) carry it on when at least this many.
+    surface_far_gap_widths, surface_far_resume_widths : float
+        Past the far end of the surface's run, a gap of at most the first many runway widths
+        along it (a full-width patch of another shade, a crossing pavement) is bridged when rows
+        differing from the ground as the runway does follow it over at least the second many
+        runway widths (whatever their own level: the pavement past a repair can be older or
+        fresher).
     surface_side_margin : float
         :func:`transverse.surface_extent` resamples the runway and this fraction of its width
         beyond each edge.
@@ -1055,6 +1061,8 @@ class DetectorParams(ParamsFile):
     surface_min_contrast: float = 2.0
     surface_resume_fraction: float = 0.6
     surface_resume_rows: int = 3
+    surface_far_gap_widths: float = 2.0
+    surface_far_resume_widths: float = 3.0
     surface_side_margin: float = 0.4
     surface_rect_columns: int = 96
     surface_width_samples: float = 50.0
@@ -1324,6 +1332,7 @@ class DetectorParams(ParamsFile):
         "strip_level_fraction": (0.0, 10.0), "ground_level_fraction": (0.0, 10.0),
         "strip_end_rows": (1, 1000, "int"), "surface_min_contrast": (0.0, 255.0),
         "surface_resume_fraction": (0.0, 1.0), "surface_resume_rows": (1, 1000, "int"),
+        "surface_far_gap_widths": (0.0, 100.0), "surface_far_resume_widths": (0.0, 1000.0),
         "surface_side_margin": (0.0, 10.0), "surface_rect_columns": (8, 10000, "int"),
         "surface_width_samples": (1.0, 10000.0), "marking_band_widths": (0.0, 100.0),
         "marking_band_max_widths": (0.0, 100.0),

@@ -275,7 +275,32 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
                 end += direction
             n_flipped += abs(end - j) + 1
 
-    lo = extend_flipped(extend(centre, -1), -1)
+    def resume_far(index):
+        # towards the horizon only, past the run's end: a full-width patch of another shade (a
+        # lighter repair up to 80 m long, brighter than the ground, 'variety 29' at 2048 px: the
+        # surface ended on it 1.3 km short of the true end, far corners 26 px off over 40 s) or a
+        # crossing pavement, then the runway's rows again (differing from the ground beside as
+        # the core does, whatever their own level: the pavement past a patch can be a fresher or
+        # older one) over several runway widths, too long to be a marking: the runway carries on.
+        # Not towards the threshold, where pavement before it (a blast pad, a displaced
+        # threshold's) is the markings' business (detector: ground_begins, threshold_marking)
+        while True:
+            gap = params.surface_far_gap_widths * gap_limit(rect.d[index])
+            j = index - 1
+            while j >= 0 and not runway[j] and rect.d[index] - rect.d[j] <= gap:
+                j -= 1
+            if j < 0 or not runway[j] or j == index - 1:
+                return index
+            k = j
+            while k - 1 >= 0 and runway[k - 1]:
+                k -= 1
+            # runway widths along it between the two depths: d = fx h / x, a width W = w h
+            resumed_widths = fx / width * (1.0 / max(rect.d[k], 1e-9) - 1.0 / rect.d[j])
+            if j - k + 1 < params.surface_resume_rows or resumed_widths < params.surface_far_resume_widths:
+                return index
+            index = extend_flipped(k, -1)
+
+    lo = resume_far(extend_flipped(extend(centre, -1), -1))
     hi = extend_flipped(extend(centre, +1), +1)
     # then across a band of blended markings (grey level on the other side of the ground's)
     band = np.nan_to_num((median - out_level) * -np.sign(reference)) > 0.5 * abs(reference)
