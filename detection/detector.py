@@ -42,6 +42,7 @@ from visland.detection.threshold_marking import (ground_begins, marked_at_start,
 from visland.detection.transverse import (TransverseLine, find_transverse_line, pavement_beyond_edges,
                                           pavement_runs_on, surface_extent)
 from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
+                                         strip_length_to_width,
                                          wider_strip_beside)
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
 from visland.folder import as_grey, ignored_pixels, scene_frame
@@ -984,6 +985,11 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
                       f"span {span_left_px:.0f} and {span_right_px:.0f} px): not the two sides of one runway")
     if not (s0_left + k_left * d_near < s0_right + k_right * d_near):
         return None, "the edges cross below the horizon"
+    length_widths = strip_length_to_width(horizon.camera.fx, k_right - k_left, d_far, d_near) if d_far > 0 else math.inf
+    if length_widths > params.max_length_to_width:
+        # (a runway is at most about 130 widths long; the span seen can only be shorter)
+        return None, (f"the strip is seen over {length_widths:.0f} of its own widths (more than "
+                      f"{params.max_length_to_width:g}): a line (a painted stripe, a road), not a runway")
     # k = Y / h for a ground line Y beside the camera: the strip's centre line lies
     # k_C / (k_R - k_L) = Y / W of its own widths to the side of the aircraft; counted at the
     # near end with the width 2 px wider than measured (edges a pixel or two apart far out

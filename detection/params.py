@@ -251,6 +251,11 @@ class DetectorParams(ParamsFile):
     min_length_to_width : float
         Smallest length-to-width ratio of a runway (a long strip; ICAO runways are 20 to 80
         times longer than wide): pairs of lines bounding a shorter strip are not runways.
+    max_length_to_width : float
+        Longest length-to-width ratio a strip may show and be a runway (the longest and
+        narrowest runways are about 130 times longer than wide; a 0.9 m side stripe along a
+        2 km runway is 2200, a 7 m road thousands): the length is the span seen, so a longer
+        one is a line, not a runway.
     pair_min_width_px : float
         Narrowest runway, pixels at the near end of the two edges' common span.
     pair_length_scale_px : float
@@ -1028,6 +1033,7 @@ class DetectorParams(ParamsFile):
     pencil_column_coverage: float = 0.5
     pencil_max_edges: int = 120
     min_length_to_width: float = 8.0
+    max_length_to_width: float = 300.0
     pair_min_width_px: float = 3.0
     pair_length_scale_px: float = 30.0
     pair_max_examined: int = 24
@@ -1318,7 +1324,7 @@ class DetectorParams(ParamsFile):
         "pencil_band_min_px": (1.0, 1000.0), "pencil_step_halfspan_px": (0.1, 100.0),
         "pencil_join_tolerance_px": (0.1, 100.0), "pencil_min_step_fraction": (0.0, 10.0),
         "pencil_column_coverage": (0.0, 1.0, "open"), "pencil_max_edges": (2, 10000, "int"),
-        "min_length_to_width": (0.0, 1000.0), "pair_min_width_px": (0.0, 1000.0),
+        "min_length_to_width": (0.0, 1000.0), "max_length_to_width": (1.0, 1e9), "pair_min_width_px": (0.0, 1000.0),
         "pair_length_scale_px": (0.1, 10000.0), "pair_max_examined": (1, 10000, "int"),
         "pair_min_interior": (0.0, 1.0), "pair_min_off_ground": (0.0, 10.0), "pair_ground_test_max_width": (0.0, 100.0), "pair_interior_margin": (0.0, 0.5), "pair_quick_centre_gap": (0.0, 0.5),
         "pair_centre_gap": (0.0, 0.5), "pair_outside_band": (0.0, 5.0), "score_symmetry_floor": (0.0, 100.0),
