@@ -42,7 +42,6 @@ from visland.detection.threshold_marking import (ground_begins, marked_at_start,
 from visland.detection.transverse import (TransverseLine, find_transverse_line, pavement_beyond_edges,
                                           pavement_runs_on, surface_extent)
 from visland.detection.trapezoid import (Prediction, RunwayHypothesis, is_convincing_strip, runway_hypotheses,
-                                         strip_length_to_width,
                                          wider_strip_beside)
 from visland.features import batch_R_camera_from_runway, dF_from_vanishing_point, dpsi_from_dF
 from visland.folder import as_grey, ignored_pixels, scene_frame
@@ -985,7 +984,7 @@ def _pair_edges(ctx: _Context, fits: dict, prediction: Prediction | None) -> tup
                       f"span {span_left_px:.0f} and {span_right_px:.0f} px): not the two sides of one runway")
     if not (s0_left + k_left * d_near < s0_right + k_right * d_near):
         return None, "the edges cross below the horizon"
-    length_widths = strip_length_to_width(horizon.camera.fx, k_right - k_left, d_far, d_near) if d_far > 0 else math.inf
+    length_widths = widths_along(horizon.camera.fx, d_near, d_far, k_right - k_left) if d_far > 0 else math.inf
     if length_widths > params.max_length_to_width:
         # (a runway is at most about 130 widths long; the span seen can only be shorter)
         return None, (f"the strip is seen over {length_widths:.0f} of its own widths (more than "

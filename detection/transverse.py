@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from visland.detection.horizon import HorizonFrame, cross3, depth_along, meet_h
+from visland.detection.horizon import HorizonFrame, cross3, depth_along, meet_h, widths_along
 from visland.detection.params import DetectorParams
 from visland.detection.pencil import as_slice, finite_median, rectify, row_mean, row_quantile, row_quantiles
 from visland.detection.refine import MAD_TO_SIGMA, PixelLine, chroma_of, median_of
@@ -294,8 +294,7 @@ def surface_extent(image, horizon: HorizonFrame, s0: float, k_left: float, k_rig
             k = j
             while k - 1 >= 0 and runway[k - 1]:
                 k -= 1
-            # runway widths along it between the two depths: d = fx h / x, a width W = w h
-            resumed_widths = fx / width * (1.0 / max(rect.d[k], 1e-9) - 1.0 / rect.d[j])
+            resumed_widths = widths_along(fx, rect.d[j], max(rect.d[k], 1e-9), width)
             if j - k + 1 < params.surface_resume_rows or resumed_widths < params.surface_far_resume_widths:
                 return index
             index = extend_flipped(k, -1)

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from visland.detection.candidates import CandidateLines
-from visland.detection.horizon import HorizonFrame
+from visland.detection.horizon import HorizonFrame, widths_along
 from visland.detection.params import DetectorParams
 from visland.detection.refine import median_of
 from visland.detection.pencil import (PencilEdges, PencilImage, as_slice, finite_median, pencil_edges, rectify, row_mean,
@@ -249,14 +249,6 @@ def runway_hypotheses(image, horizon: HorizonFrame, lines: CandidateLines, param
     return hypotheses[:params.max_hypotheses]
 
 
-def strip_length_to_width(focal_px, width_k, d_far, d_near):
-    """Length over width of a ground strip seen between depths ``d_far`` and ``d_near`` (pixels
-    below the horizon), ``width_k`` its width over the camera height (``k_R - k_L``): with
-    ``d = f h / x`` (``x`` the distance ahead), ``L / W = f (d_near - d_far) / (width_k d_near d_far)``.
-    Arrays broadcast."""
-    return focal_px * (d_near - d_far) / (width_k * d_near * d_far)
-
-
 def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
            prediction: Prediction | None, rect_focal_px: float,
            bottom_depth_px: float = math.inf) -> list[RunwayHypothesis]:
@@ -276,7 +268,7 @@ def _pairs(rect: PencilImage, edges: PencilEdges, params: DetectorParams,
     # shorten it); but not a line: a strip seen longer than any runway is a painted stripe
     # (a side stripe's two flanks) or a road
     with np.errstate(divide="ignore", invalid="ignore"):
-        length_to_width = strip_length_to_width(rect_focal_px, edges.k[R] - edges.k[L], d_far, d_near)
+        length_to_width = widths_along(rect_focal_px, d_near, d_far, edges.k[R] - edges.k[L])
     ok &= (length_to_width >= params.min_length_to_width) & (length_to_width <= params.max_length_to_width)
     li, ri = L[ok], R[ok]
     if len(li) == 0:

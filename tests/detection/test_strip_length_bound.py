@@ -18,7 +18,7 @@ from tests.helpers.detection_frames import airport_frame, edge_error_px
 from tests.helpers.raycast_airport import PaintedAirport
 from visland.camera import CameraModel
 from visland.detection import DetectorParams, detect_runway
-from visland.detection.trapezoid import strip_length_to_width
+from visland.detection.horizon import widths_along
 from visland.runway import Runway
 
 
@@ -30,7 +30,7 @@ def test_the_ratio_is_the_ground_strips_length_over_width(length_m, width_m, hei
     spreads over ``(W / h) d`` pixels at depth ``d``: the ratio read from the image is L / W."""
     fx = 2472.0
     d_near, d_far = fx * height_m / x_near_m, fx * height_m / (x_near_m + length_m)
-    ratio = strip_length_to_width(fx, width_m / height_m, d_far, d_near)
+    ratio = widths_along(fx, d_near, d_far, width_m / height_m)
     assert math.isclose(ratio, length_m / width_m, rel_tol=1e-12)
 
 
